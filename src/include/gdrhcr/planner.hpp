@@ -1,0 +1,60 @@
+// The planner interface every lifelong solver implements (PIBT, RHCR, GD-RHCR), and the
+// registry the command line and the ROS node use to build one by name from parameters.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "gdrhcr/dist_table.hpp"
+#include "gdrhcr/grid.hpp"
+#include "gdrhcr/params.hpp"
+
+namespace gdrhcr {
+
+// What a planner sees at one timestep. goals[i][0] is agent i's current goal; goals[i][k] for
+// k >= 1 are its next known goals (the lookahead; may be empty where tasks are not known yet).
+struct WorldView {
+  const Grid& grid;
+  const DistTable& dist;
+  int timestep;
+  const std::vector<Cell>& positions;
+  const std::vector<std::vector<Cell>>& goals;
+  int num_agents() const { return static_cast<int>(positions.size()); }
+};
+
+struct StepReport {
+  bool planned = false;     // a solver ran in this step (RHCR plans only every alpha steps)
+  double plan_time_s = 0;   // the planner's plan-time metric for this step
+};
+
+class Planner {
+ public:
+  virtual ~Planner() = default;
+  virtual std::string name() const = 0;
+  // Fills next[i] with agent i's cell at timestep+1: a wait or a move to a 4-neighbour, with no
+  // vertex or edge collision. Positions may differ from what the planner commanded before (a
+  // robot may lag); planners must plan from the positions given.
+  virtual StepReport plan_step(const WorldView& world, std::vector<Cell>& next) = 0;
+  // Every parameter in use, for the result record.
+  virtual nlohmann::json params() const = 0;
+  // Planner-specific counters for the result record (solver calls, fallbacks, groups, ...).
+  virtual nlohmann::json stats() const { return nlohmann::json::object(); }
+};
+
+// Builds a planner from parameters (e.g. --H 20 from the command line or a ROS param).
+// The factory reads what it needs from `params`; unread parameters are an error for the caller.
+using PlannerFactory = std::function<std::unique_ptr<Planner>(Params& params, const Grid& grid,
+                                                              int num_agents, uint64_t seed)>;
+
+// Planner names known to `make_planner`, in registration order.
+std::vector<std::string> planner_names();
+// Throws std::invalid_argument for an unknown name or a bad parameter value.
+std::unique_ptr<Planner> make_planner(const std::string& name, Params& params, const Grid& grid,
+                                      int num_agents, uint64_t seed);
+
+}  // namespace gdrhcr

@@ -1,0 +1,47 @@
+// The lifelong MAPF simulation loop: ask the planner for every agent's next cell, validate the
+// step (a violation throws CollisionError), move, and hand a new goal to every agent that
+// reached its goal. Throughput = goals reached / timesteps.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "gdrhcr/dist_table.hpp"
+#include "gdrhcr/planner.hpp"
+#include "gdrhcr/task_stream.hpp"
+
+namespace gdrhcr {
+
+struct SimOptions {
+  int steps = 500;
+  int lookahead = 3;          // goals known per agent: the current one and lookahead-1 more
+  bool record_paths = false;
+};
+
+struct SimResult {
+  int steps = 0;
+  int agents = 0;
+  long goals_reached = 0;
+  double throughput = 0;
+  double free_flow_throughput = 0;
+  long collisions = 0;        // stays 0: a collision aborts the run with CollisionError
+  int planned_steps = 0;      // steps in which the planner ran a solver
+  double plan_time_mean_s = 0, plan_time_max_s = 0;
+  double step_wall_mean_s = 0, step_wall_max_s = 0;  // wall time of plan_step, every step
+  double wall_time_s = 0;
+  std::vector<std::vector<Cell>> paths;  // paths[agent][t], when recorded
+  nlohmann::json to_json() const;        // the figures above (not the paths)
+};
+
+SimResult run_simulation(const Grid& grid, const DistTable& dist, TaskStream& tasks,
+                         Planner& planner, const std::vector<Cell>& starts,
+                         const SimOptions& options);
+
+// Goals per timestep if every agent followed the same goal sequence alone on shortest paths:
+// the physical upper bound a planner is compared against.
+double free_flow_throughput(const Grid& grid, const DistTable& dist, const TaskStream& tasks,
+                            const std::vector<Cell>& starts, int steps);
+
+}  // namespace gdrhcr

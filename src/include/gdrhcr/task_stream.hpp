@@ -1,0 +1,87 @@
+// Seeded task streams for lifelong MAPF: each agent draws its goals from its own random
+// generator, so an agent's goal sequence depends only on (seed, agent id), never on the planner
+// or on timing. That makes runs reproducible and lets the free-flow bound replay the same goals.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "gdrhcr/grid.hpp"
+
+namespace gdrhcr {
+
+// splitmix64: decorrelates (seed, stream id) pairs into generator seeds.
+uint64_t mix_seed(uint64_t seed, uint64_t stream);
+
+class TaskStream {
+ public:
+  virtual ~TaskStream() = default;
+  virtual std::string name() const = 0;
+  // The next goal of `agent`, who stands at `current` (the goal always differs from it when the
+  // map allows). Called in order for each agent; agents are independent.
+  virtual Cell next_goal(int agent, Cell current) = 0;
+  // A fresh stream with the same seed and rules, at the start of every agent's sequence.
+  virtual std::unique_ptr<TaskStream> clone_fresh() const = 0;
+};
+
+// Each new goal is a uniformly random free cell.
+class RandomNavigationStream : public TaskStream {
+ public:
+  RandomNavigationStream(const Grid& grid, uint64_t seed);
+  std::string name() const override { return "random"; }
+  Cell next_goal(int agent, Cell current) override;
+  std::unique_ptr<TaskStream> clone_fresh() const override;
+
+ private:
+  std::mt19937_64& rng(int agent);
+  const Grid& grid_;
+  uint64_t seed_;
+  std::vector<std::mt19937_64> rngs_;
+};
+
+// Multi-agent pickup and delivery: agents alternate pickup, delivery, pickup, ... each drawn
+// uniformly from its set. See `default_mapd_cells` for how the sets are chosen for a map.
+class PickupDeliveryStream : public TaskStream {
+ public:
+  PickupDeliveryStream(const Grid& grid, std::vector<Cell> pickups, std::vector<Cell> deliveries,
+                       uint64_t seed);
+  std::string name() const override { return "mapd"; }
+  Cell next_goal(int agent, Cell current) override;
+  std::unique_ptr<TaskStream> clone_fresh() const override;
+  const std::vector<Cell>& pickups() const { return pickups_; }
+  const std::vector<Cell>& deliveries() const { return deliveries_; }
+
+ private:
+  const Grid& grid_;
+  std::vector<Cell> pickups_, deliveries_;
+  uint64_t seed_;
+  std::vector<std::mt19937_64> rngs_;
+  std::vector<uint8_t> next_is_delivery_;
+};
+
+struct MapdCells {
+  std::vector<Cell> pickups, deliveries;
+  std::string rule;  // how they were chosen, recorded in results
+};
+
+// The documented rule for pickup and delivery cells:
+//  - kiva maps: pickups are the endpoints `e` (shelf access), deliveries the homes `r`
+//    (the workstation columns on the left and right);
+//  - other maps: deliveries are the free cells of the leftmost and rightmost free columns
+//    (the stations of the MovingAI warehouse maps), pickups are the other free cells with an
+//    obstacle 4-neighbour inside the map (the cells in front of shelves). Where a set would be
+//    empty, it falls back to all free cells.
+MapdCells default_mapd_cells(const Grid& grid);
+
+// Reads a list of cells, one "x y" (or "x,y") per line, '#' comments allowed. Throws MapError
+// naming the line for a malformed entry, a cell off the map or on an obstacle.
+std::vector<Cell> load_cell_list(const Grid& grid, const std::string& path);
+
+// `count` distinct free cells drawn with `seed`. Throws std::invalid_argument when the map has
+// fewer free cells than agents.
+std::vector<Cell> random_starts(const Grid& grid, int count, uint64_t seed);
+
+}  // namespace gdrhcr

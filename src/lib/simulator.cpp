@@ -1,0 +1,111 @@
+#include "gdrhcr/simulator.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+#include "gdrhcr/validator.hpp"
+
+namespace gdrhcr {
+
+using Clock = std::chrono::steady_clock;
+
+static double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+nlohmann::json SimResult::to_json() const {
+  return {{"steps", steps},
+          {"agents", agents},
+          {"goals_reached", goals_reached},
+          {"throughput", throughput},
+          {"free_flow_throughput", free_flow_throughput},
+          {"collisions", collisions},
+          {"planned_steps", planned_steps},
+          {"plan_time_mean_s", plan_time_mean_s},
+          {"plan_time_max_s", plan_time_max_s},
+          {"step_wall_time_mean_s", step_wall_mean_s},
+          {"step_wall_time_max_s", step_wall_max_s},
+          {"wall_time_s", wall_time_s}};
+}
+
+SimResult run_simulation(const Grid& grid, const DistTable& dist, TaskStream& tasks,
+                         Planner& planner, const std::vector<Cell>& starts,
+                         const SimOptions& options) {
+  const auto t_start = Clock::now();
+  const int n = static_cast<int>(starts.size());
+  const int lookahead = std::max(1, options.lookahead);
+  SimResult r;
+  r.steps = options.steps;
+  r.agents = n;
+
+  std::vector<Cell> pos = starts, next(n, kNoCell);
+  StepValidator validator(grid);
+  // The start must itself be a valid configuration: free, distinct cells.
+  validator.require_valid(pos, pos, -1);
+
+  std::vector<std::vector<Cell>> goals(n);
+  for (int i = 0; i < n; ++i) {
+    Cell last = pos[i];
+    for (int k = 0; k < lookahead; ++k) goals[i].push_back(last = tasks.next_goal(i, last));
+  }
+  if (options.record_paths) {
+    r.paths.assign(n, {});
+    for (int i = 0; i < n; ++i) r.paths[i].reserve(options.steps + 1), r.paths[i].push_back(pos[i]);
+  }
+
+  double plan_sum = 0, wall_sum = 0;
+  for (int t = 0; t < options.steps; ++t) {
+    std::fill(next.begin(), next.end(), kNoCell);
+    WorldView view{grid, dist, t, pos, goals};
+    const auto t0 = Clock::now();
+    const StepReport rep = planner.plan_step(view, next);
+    const double wall = seconds_since(t0);
+    wall_sum += wall;
+    r.step_wall_max_s = std::max(r.step_wall_max_s, wall);
+    if (rep.planned) {
+      ++r.planned_steps;
+      plan_sum += rep.plan_time_s;
+      r.plan_time_max_s = std::max(r.plan_time_max_s, rep.plan_time_s);
+    }
+    validator.require_valid(pos, next, t);
+    pos.swap(next);
+    for (int i = 0; i < n; ++i) {
+      if (pos[i] != goals[i].front()) continue;
+      ++r.goals_reached;
+      goals[i].erase(goals[i].begin());
+      goals[i].push_back(tasks.next_goal(i, goals[i].empty() ? pos[i] : goals[i].back()));
+    }
+    if (options.record_paths)
+      for (int i = 0; i < n; ++i) r.paths[i].push_back(pos[i]);
+  }
+  r.throughput = options.steps > 0 ? double(r.goals_reached) / options.steps : 0;
+  r.plan_time_mean_s = r.planned_steps ? plan_sum / r.planned_steps : 0;
+  r.step_wall_mean_s = options.steps > 0 ? wall_sum / options.steps : 0;
+  r.free_flow_throughput = free_flow_throughput(grid, dist, tasks, starts, options.steps);
+  r.wall_time_s = seconds_since(t_start);
+  return r;
+}
+
+double free_flow_throughput(const Grid& grid, const DistTable& dist, const TaskStream& tasks,
+                            const std::vector<Cell>& starts, int steps) {
+  (void)grid;
+  if (steps <= 0) return 0;
+  auto replay = tasks.clone_fresh();
+  long reached = 0;
+  for (int i = 0; i < static_cast<int>(starts.size()); ++i) {
+    Cell cur = starts[i];
+    long t = 0;
+    for (;;) {
+      const Cell g = replay->next_goal(i, cur);
+      const int d = dist.get(g, cur);
+      if (d >= kUnreachable) break;  // unreachable goal: the agent never gets there
+      t += std::max(d, 1);
+      if (t > steps) break;
+      ++reached;
+      cur = g;
+    }
+  }
+  return double(reached) / steps;
+}
+
+}  // namespace gdrhcr

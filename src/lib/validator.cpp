@@ -1,0 +1,70 @@
+#include "gdrhcr/validator.hpp"
+
+#include <sstream>
+
+namespace gdrhcr {
+
+std::string StepViolation::describe(const Grid& grid, int timestep) const {
+  std::ostringstream os;
+  os << "step " << timestep << " -> " << timestep + 1 << ": ";
+  switch (kind) {
+    case Kind::Vertex:
+      os << "vertex collision: agents " << agent_a << " and " << agent_b << " both at "
+         << grid.describe(to);
+      break;
+    case Kind::Edge:
+      os << "edge collision: agents " << agent_a << " and " << agent_b << " swap "
+         << grid.describe(from) << " and " << grid.describe(to);
+      break;
+    case Kind::Obstacle:
+      os << "agent " << agent_a << " moves from " << grid.describe(from)
+         << " into an obstacle or off the map at " << grid.describe(to);
+      break;
+    case Kind::Jump:
+      os << "agent " << agent_a << " jumps from " << grid.describe(from) << " to "
+         << grid.describe(to) << " (not adjacent)";
+      break;
+    case Kind::AgentCount:
+      os << "the plan covers a different number of agents than the fleet";
+      break;
+  }
+  return os.str();
+}
+
+StepValidator::StepValidator(const Grid& grid)
+    : grid_(grid),
+      occupant_now_(grid.num_cells(), -1),
+      occupant_next_(grid.num_cells(), -1),
+      stamp_now_(grid.num_cells(), 0),
+      stamp_next_(grid.num_cells(), 0) {}
+
+std::optional<StepViolation> StepValidator::check(const std::vector<Cell>& prev,
+                                                  const std::vector<Cell>& next) {
+  using K = StepViolation::Kind;
+  if (prev.size() != next.size()) return StepViolation{K::AgentCount};
+  ++stamp_;
+  const int n = static_cast<int>(prev.size());
+  for (int i = 0; i < n; ++i) {
+    if (!grid_.is_free(next[i])) return StepViolation{K::Obstacle, i, -1, prev[i], next[i]};
+    if (!grid_.step_allowed(prev[i], next[i])) return StepViolation{K::Jump, i, -1, prev[i], next[i]};
+    if (stamp_next_[next[i]] == stamp_)
+      return StepViolation{K::Vertex, occupant_next_[next[i]], i, prev[i], next[i]};
+    stamp_next_[next[i]] = stamp_;
+    occupant_next_[next[i]] = i;
+    stamp_now_[prev[i]] = stamp_;
+    occupant_now_[prev[i]] = i;
+  }
+  for (int i = 0; i < n; ++i) {
+    if (next[i] == prev[i] || stamp_now_[next[i]] != stamp_) continue;
+    const int j = occupant_now_[next[i]];
+    if (j != i && next[j] == prev[i]) return StepViolation{K::Edge, i, j, prev[i], next[i]};
+  }
+  return std::nullopt;
+}
+
+void StepValidator::require_valid(const std::vector<Cell>& prev, const std::vector<Cell>& next,
+                                  int timestep) {
+  if (auto v = check(prev, next)) throw CollisionError(v->describe(grid_, timestep));
+}
+
+}  // namespace gdrhcr
