@@ -1,0 +1,76 @@
+#include "gdrhcr/group_partition.hpp"
+
+#include <numeric>
+
+namespace gdrhcr {
+
+void UnionFind::reset(int n) {
+  parent_.resize(n);
+  std::iota(parent_.begin(), parent_.end(), 0);
+  rank_.assign(n, 0);
+}
+
+int UnionFind::find(int a) {
+  while (parent_[a] != a) {
+    parent_[a] = parent_[parent_[a]];  // path halving
+    a = parent_[a];
+  }
+  return a;
+}
+
+void UnionFind::unite(int a, int b) {
+  a = find(a);
+  b = find(b);
+  if (a == b) return;
+  if (rank_[a] < rank_[b]) std::swap(a, b);
+  parent_[b] = a;
+  if (rank_[a] == rank_[b]) ++rank_[a];
+}
+
+GroupPartition::GroupPartition(const Grid& grid)
+    : grid_(grid), agent_at_(grid.num_cells(), -1), seen_stamp_(grid.num_cells(), 0) {}
+
+void GroupPartition::compute(const std::vector<Cell>& positions, int V) {
+  const int n = static_cast<int>(positions.size());
+  uf_.reset(n);
+  for (int i = 0; i < n; ++i) agent_at_[positions[i]] = i;
+  for (int i = 0; i < n; ++i) {
+    // BFS of depth V from agent i; linking to agents with a larger id is enough, since the
+    // distance is symmetric and the other direction is found from the smaller id.
+    if (++stamp_ == 0) {  // stamp wrapped: clear the marks once
+      std::fill(seen_stamp_.begin(), seen_stamp_.end(), 0);
+      stamp_ = 1;
+    }
+    frontier_.clear();
+    frontier_.emplace_back(positions[i], 0);
+    seen_stamp_[positions[i]] = stamp_;
+    for (size_t head = 0; head < frontier_.size(); ++head) {
+      auto [c, d] = frontier_[head];
+      const int j = agent_at_[c];
+      if (j > i) uf_.unite(i, j);
+      if (d == V) continue;
+      for (Cell nb : grid_.neighbours(c)) {
+        if (seen_stamp_[nb] == stamp_) continue;
+        seen_stamp_[nb] = stamp_;
+        frontier_.emplace_back(nb, d + 1);
+      }
+    }
+  }
+  for (int i = 0; i < n; ++i) agent_at_[positions[i]] = -1;
+
+  // Canonical order: iterating agents ascending makes each group's first agent its smallest.
+  groups_.clear();
+  group_of_.assign(n, -1);
+  std::vector<int> index_of_root(n, -1);
+  for (int i = 0; i < n; ++i) {
+    const int r = uf_.find(i);
+    if (index_of_root[r] < 0) {
+      index_of_root[r] = static_cast<int>(groups_.size());
+      groups_.emplace_back();
+    }
+    group_of_[i] = index_of_root[r];
+    groups_[index_of_root[r]].push_back(i);
+  }
+}
+
+}  // namespace gdrhcr
