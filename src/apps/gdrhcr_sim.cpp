@@ -21,7 +21,8 @@ const char* kUsage =
     "usage: gdrhcr_sim --map FILE [options]\n"
     "  --map FILE          MovingAI .map or RHCR kiva .map (required)\n"
     "  --tasks random|mapd task stream (default random)\n"
-    "  --pickups FILE      MAPD pickup cells, 'x y' per line (default: the map's rule)\n"
+    "  --pickups FILE      MAPD pickup cells, 'x y' per line (default: MAP.pickups beside\n"
+    "                      the map if present, else the rule in the README)\n"
     "  --deliveries FILE   MAPD delivery cells, 'x y' per line (default: the map's rule)\n"
     "  --planner NAME      planner: %s (default pibt)\n"
     "  --agents N          number of agents (default 100)\n"
@@ -106,7 +107,7 @@ int main(int argc, char** argv) {
     if (task_kind == "random") {
       tasks = std::make_unique<RandomNavigationStream>(grid, seed);
     } else {
-      MapdCells cells = default_mapd_cells(grid);
+      MapdCells cells = mapd_cells_for_map(grid, map_path);
       if (!pickups_file.empty()) cells.pickups = load_cell_list(grid, pickups_file), cells.rule = "given lists";
       if (!deliveries_file.empty()) cells.deliveries = load_cell_list(grid, deliveries_file), cells.rule = "given lists";
       task_info["rule"] = cells.rule;

@@ -107,6 +107,19 @@ MapdCells default_mapd_cells(const Grid& grid) {
   return out;
 }
 
+MapdCells mapd_cells_for_map(const Grid& grid, const std::string& map_path) {
+  std::string base = map_path;
+  if (base.size() > 4 && base.compare(base.size() - 4, 4, ".map") == 0) base.resize(base.size() - 4);
+  if (std::ifstream(base + ".pickups") && std::ifstream(base + ".deliveries")) {
+    MapdCells out;
+    out.pickups = load_cell_list(grid, base + ".pickups");
+    out.deliveries = load_cell_list(grid, base + ".deliveries");
+    out.rule = "side files " + base + ".pickups / .deliveries";
+    return out;
+  }
+  return default_mapd_cells(grid);
+}
+
 std::vector<Cell> load_cell_list(const Grid& grid, const std::string& path) {
   std::ifstream in(path);
   if (!in) throw MapError(path + ": cannot open cell list");

@@ -97,3 +97,31 @@ TEST(TaskStream, RandomStartsDistinctAndBounded) {
   EXPECT_THROW(random_starts(g, 9, 3), std::invalid_argument);
   EXPECT_THROW(random_starts(g, 0, 3), std::invalid_argument);
 }
+
+TEST(TaskStream, GeneratedSortationMapsHaveReachableSideFiles) {
+  // tools/gen_maps.py output: sizes, one connected component, and every pickup and delivery
+  // cell free (load_cell_list throws otherwise) and reachable.
+  struct { const char* name; int w, h; } maps[] = {{"sortation-1", 203, 91}, {"sortation-2", 127, 57}};
+  for (auto& m : maps) {
+    const std::string path = repo(std::string("maps/") + m.name + ".map");
+    Grid g = Grid::load(path);
+    EXPECT_EQ(g.width(), m.w);
+    EXPECT_EQ(g.height(), m.h);
+    EXPECT_EQ(g.count_components(), 1) << m.name;
+    MapdCells cells = mapd_cells_for_map(g, path);
+    EXPECT_NE(cells.rule.find("side files"), std::string::npos);
+    EXPECT_GT(cells.pickups.size(), 100u);
+    EXPECT_GT(cells.deliveries.size(), 500u);
+    EXPECT_GE(g.free_cells().size(), 4000u);  // room for 1000 agents
+  }
+}
+
+TEST(TaskStream, GeneratedRoomVariantsAreConnected) {
+  for (const char* name : {"room-32-32-var1", "room-64-64-var1", "room-64-64-var2"}) {
+    Grid g = Grid::load(repo(std::string("maps/") + name + ".map"));
+    EXPECT_EQ(g.count_components(), 1) << name;
+  }
+  // var2 has wider openings than var1 on the same rooms: more free cells.
+  EXPECT_GT(Grid::load(repo("maps/room-64-64-var2.map")).free_cells().size(),
+            Grid::load(repo("maps/room-64-64-var1.map")).free_cells().size());
+}

@@ -76,6 +76,10 @@ struct MapdCells {
 //    empty, it falls back to all free cells.
 MapdCells default_mapd_cells(const Grid& grid);
 
+// The MAPD cells for a map file: side files `<map without .map>.pickups` and `.deliveries`
+// beside it when both exist (the generated sortation maps have them), else the rule above.
+MapdCells mapd_cells_for_map(const Grid& grid, const std::string& map_path);
+
 // Reads a list of cells, one "x y" (or "x,y") per line, '#' comments allowed. Throws MapError
 // naming the line for a malformed entry, a cell off the map or on an obstacle.
 std::vector<Cell> load_cell_list(const Grid& grid, const std::string& path);
