@@ -7,7 +7,7 @@ set -eo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 pkgs=(
   build-essential cmake libgtest-dev googletest libgmock-dev libtbb-dev nlohmann-json3-dev
-  libyaml-cpp-dev python3-matplotlib python3-numpy
+  libyaml-cpp-dev python3-matplotlib python3-numpy python3-yaml
   catkin ros-message-generation ros-message-runtime libroscpp-dev python3-rospy
   ros-std-msgs libstd-msgs-dev python3-std-msgs
   ros-geometry-msgs libgeometry-msgs-dev python3-geometry-msgs

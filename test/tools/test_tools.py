@@ -1,0 +1,161 @@
+"""Tests of the experiment harness: the sweep's CSV and resumption (a killed sweep resumes
+without duplicates), plots from a tiny CSV, and the group picture's partition.
+Run: GDRHCR_SIM=build/src/gdrhcr_sim python3 -m unittest discover -s test/tools"""
+import csv
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+import gdrhcr_sweep  # noqa: E402
+import plot_groups  # noqa: E402
+import plot_sweep  # noqa: E402
+
+SIM = os.environ.get("GDRHCR_SIM", os.path.join(ROOT, "build", "src", "gdrhcr_sim"))
+
+CONFIG = """
+name: test
+steps: 30
+seeds: 3
+experiments:
+  - map: maps/random-32-32-20.map
+    tasks: random
+    agents: [20, 40]
+    planners:
+      - {label: PIBT, planner: pibt}
+      - {label: PIBT-mapd-no, planner: pibt, lookahead: 1}
+"""
+
+
+def rows_of(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+class SweepTest(unittest.TestCase):
+    def setUp(self):
+        self.tmp = tempfile.TemporaryDirectory()
+        self.cfg = os.path.join(self.tmp.name, "c.yaml")
+        with open(self.cfg, "w") as f:
+            f.write(CONFIG)
+        self.csv = os.path.join(self.tmp.name, "out", "r.csv")
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def sweep(self, *extra):
+        return gdrhcr_sweep.main([self.cfg, "--out", self.csv, "--jobs", "2", "--sim", SIM, *extra])
+
+    def test_expand_counts_and_k_threshold_rule(self):
+        cfg = {"steps": 10, "seeds": [4, 5], "experiments": [
+            {"map": "m", "agents": [10, 300], "planners": [
+                {"label": "G", "planner": "gd-rhcr", "k_threshold_fraction": 0.1, "k_threshold_cap": 20}]}]}
+        runs = gdrhcr_sweep.expand(cfg)
+        self.assertEqual(len(runs), 4)
+        self.assertEqual({r["options"]["k-threshold"] for r in runs if r["agents"] == 10}, {2})
+        self.assertEqual({r["options"]["k-threshold"] for r in runs if r["agents"] == 300}, {20})
+
+    def test_full_sweep_writes_every_run_once(self):
+        self.assertEqual(self.sweep(), 0)
+        rows = rows_of(self.csv)
+        self.assertEqual(len(rows), 12)
+        self.assertEqual(len({gdrhcr_sweep.run_key(r) for r in rows}), 12)
+        for r in rows:
+            self.assertEqual(r["status"], "ok")
+            self.assertEqual(r["collisions"], "0")
+            self.assertGreater(float(r["throughput"]), 0)
+        # A second run has nothing left to do and adds nothing.
+        self.assertEqual(self.sweep(), 0)
+        self.assertEqual(len(rows_of(self.csv)), 12)
+
+    def test_resume_after_partial_run_and_torn_line(self):
+        self.assertEqual(self.sweep("--limit", "5"), 0)
+        self.assertEqual(len(rows_of(self.csv)), 5)
+        with open(self.csv, "a") as f:
+            f.write("PIBT,maps/random-32-32-20.map,random,20,9,30,te")  # a kill mid-write
+        self.assertEqual(self.sweep(), 0)
+        rows = rows_of(self.csv)
+        self.assertEqual(len(rows), 12)
+        self.assertEqual(len({gdrhcr_sweep.run_key(r) for r in rows}), 12)
+
+    def test_killed_sweep_resumes_without_duplicates(self):
+        cmd = [sys.executable, os.path.join(ROOT, "tools", "gdrhcr_sweep.py"), self.cfg,
+               "--out", self.csv, "--jobs", "1", "--sim", SIM]
+        proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        deadline = time.time() + 60
+        while time.time() < deadline:
+            if os.path.exists(self.csv) and len(rows_of(self.csv)) >= 2:
+                break
+            time.sleep(0.02)
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+        partial = len(rows_of(self.csv))
+        self.assertGreaterEqual(partial, 2)
+        self.assertEqual(self.sweep(), 0)
+        rows = rows_of(self.csv)
+        self.assertEqual(len(rows), 12)
+        self.assertEqual(len({gdrhcr_sweep.run_key(r) for r in rows}), 12)
+
+    def test_bad_config_and_missing_simulator(self):
+        with open(self.cfg, "w") as f:
+            f.write("steps: 3\n")
+        self.assertEqual(gdrhcr_sweep.main([self.cfg, "--out", self.csv, "--sim", SIM]), 2)
+        with open(self.cfg, "w") as f:
+            f.write(CONFIG)
+        self.assertEqual(gdrhcr_sweep.main([self.cfg, "--out", self.csv, "--sim", "/no/such/sim"]), 2)
+
+    def test_failed_runs_are_recorded_and_retried(self):
+        with open(self.cfg, "w") as f:
+            f.write(CONFIG.replace("lookahead: 1", "lookahead: 0"))  # invalid: rejected by the sim
+        self.assertEqual(self.sweep(), 1)
+        rows = rows_of(self.csv)
+        bad = [r for r in rows if r["status"] != "ok"]
+        self.assertEqual(len(bad), 6)
+        self.assertIn("lookahead", bad[0]["error"])
+
+
+class PlotTest(unittest.TestCase):
+    def test_plots_from_tiny_csv(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "t.csv")
+            with open(path, "w", newline="") as f:
+                w = csv.DictWriter(f, fieldnames=gdrhcr_sweep.FIELDS)
+                w.writeheader()
+                for label in ("GD-RHCR", "PIBT"):
+                    for agents in (10, 20):
+                        for seed in (0, 1):
+                            row = {k: "" for k in gdrhcr_sweep.FIELDS}
+                            row.update(label=label, map="maps/x.map", tasks="random", agents=agents,
+                                       seed=seed, steps=50, status="ok", throughput=agents / 10 + seed,
+                                       plan_time_mean_s=0.001 * agents, wall_time_s=1 + seed)
+                            if label == "GD-RHCR":
+                                row.update(groups_mean_count=agents / 2, groups_mean_size=2, groups_mean_max_size=4)
+                            w.writerow(row)
+            out = os.path.join(tmp, "figs")
+            self.assertEqual(plot_sweep.main([path, "--out", out]), 0)
+            for name in ("x_throughput.png", "x_plan_time.png", "x_wall_time.png", "x_groups.png"):
+                p = os.path.join(out, name)
+                self.assertTrue(os.path.exists(p), name)
+                with open(p, "rb") as f:
+                    self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
+            data = plot_sweep.series(plot_sweep.load(path), "throughput")
+            self.assertAlmostEqual(data["PIBT"][0][1], 1.5)  # mean of 1.0 and 2.0
+            self.assertAlmostEqual(data["PIBT"][0][2], 0.7071067811865476)  # sample SD
+
+
+class GroupPictureTest(unittest.TestCase):
+    def test_partition_respects_walls(self):
+        rows = [".@...", ".@...", "....."]
+        comp, links = plot_groups.groups(rows, [(0, 0), (2, 0), (3, 0)], 2)
+        self.assertNotEqual(comp[0], comp[1])  # 6 apart around the wall
+        self.assertEqual(comp[1], comp[2])
+        self.assertEqual(links, [(1, 2)])
+
+
+if __name__ == "__main__":
+    unittest.main()
