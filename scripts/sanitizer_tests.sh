@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# The core's tests under AddressSanitizer + UndefinedBehaviorSanitizer, and the parallel
+# planner's tests under ThreadSanitizer. Any report fails the run.
+set -eo pipefail
+top=$(cd "$(dirname "$0")/.." && pwd)
+jobs=$(nproc)
+export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
+export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
+export TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1
+
+echo "--- ASan + UBSan build"
+cmake -S "$top" -B "$top/build-asan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGDRHCR_SANITIZE=address,undefined \
+  -DCMAKE_CXX_FLAGS=-fno-sanitize-recover=undefined >/dev/null
+cmake --build "$top/build-asan" -j"$jobs" --target gdrhcr_core_tests gdrhcr_sim
+"$top/build-asan/test/gdrhcr_core_tests" --gtest_brief=1
+
+echo "--- TSan build (parallel GD-RHCR and the shared distance table)"
+cmake -S "$top" -B "$top/build-tsan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGDRHCR_SANITIZE=thread >/dev/null
+cmake --build "$top/build-tsan" -j"$jobs" --target gdrhcr_core_tests
+"$top/build-tsan/test/gdrhcr_core_tests" --gtest_brief=1 --gtest_filter='GdRhcr*:DistTable*'
+echo "sanitizer tests: clean"
