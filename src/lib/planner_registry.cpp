@@ -4,6 +4,7 @@
 
 #include "gdrhcr/pibt.hpp"
 #include "gdrhcr/planner.hpp"
+#include "gdrhcr/rhcr.hpp"
 
 namespace gdrhcr {
 namespace {
@@ -13,6 +14,17 @@ const std::vector<std::pair<std::string, PlannerFactory>>& registry() {
       {"pibt",
        [](Params&, const Grid& grid, int n, uint64_t seed) -> std::unique_ptr<Planner> {
          return std::make_unique<PibtPlanner>(grid, n, seed);
+       }},
+      {"rhcr",
+       [](Params& p, const Grid& grid, int n, uint64_t seed) -> std::unique_ptr<Planner> {
+         RhcrConfig c;
+         c.H = p.get_int("H", c.H, 1, 100000);
+         c.alpha = p.get_int("alpha", c.alpha, 1, 100000);
+         if (c.alpha > c.H) throw ParamError("parameter alpha must be <= H (" + std::to_string(c.H) + ")");
+         c.timeout_s = p.get_double("timeout", c.timeout_s, 0, 1e9);
+         if (!(c.timeout_s > 0)) throw ParamError("parameter timeout must be > 0 seconds");
+         c.node_budget = p.get_int("node-budget", 0, 0, 2000000000);
+         return std::make_unique<RhcrPlanner>(grid, n, seed, c);
        }},
   };
   return planners;

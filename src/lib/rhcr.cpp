@@ -1,0 +1,94 @@
+// RHCR with PBS and a PIBT fallback: see rhcr.hpp. Li et al., AAAI 2021.
+#include "gdrhcr/rhcr.hpp"
+
+#include <algorithm>
+
+#include "gdrhcr/pbs.hpp"
+
+namespace gdrhcr {
+
+RhcrPlanner::RhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, RhcrConfig config)
+    : seed_(seed), cfg_(config), pibt_(grid, num_agents, seed) {
+  if (cfg_.H < 1) throw ParamError("RHCR: H must be >= 1");
+  if (cfg_.alpha < 1 || cfg_.alpha > cfg_.H) throw ParamError("RHCR: alpha must be in [1, H]");
+  if (!(cfg_.timeout_s > 0)) throw ParamError("RHCR: timeout must be > 0");
+  if (cfg_.node_budget < 0) throw ParamError("RHCR: node-budget must be >= 0");
+}
+
+bool RhcrPlanner::on_plan(const WorldView& world) const {
+  const int k = world.timestep - plan_start_;
+  for (int i = 0; i < world.num_agents(); ++i)
+    if (plan_[i][std::min<size_t>(k, plan_[i].size() - 1)] != world.positions[i]) return false;
+  return true;
+}
+
+StepReport RhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& next) {
+  const int n = world.num_agents();
+  StepReport report;
+  const bool period_over = !started_ || world.timestep - plan_start_ >= cfg_.alpha;
+  bool replan = period_over;
+  if (!replan && have_plan_ && !on_plan(world)) {
+    replan = true;  // a robot lagged or was moved: the rest of the plan is stale
+    ++deviation_replans_;
+  }
+  if (replan) {
+    started_ = true;
+    plan_start_ = world.timestep;
+    // An agent without a known goal just keeps its cell (a one-goal sequence it already meets).
+    std::vector<std::vector<Cell>> goals(world.goals.begin(), world.goals.end());
+    for (int i = 0; i < n; ++i)
+      if (goals[i].empty()) goals[i] = {world.positions[i]};
+    PbsConfig pc;
+    pc.horizon = cfg_.H;
+    pc.c_soft = 0;
+    pc.time_limit_s = cfg_.timeout_s;
+    pc.node_budget = cfg_.node_budget;
+    PbsResult r = solve_pbs(world.grid, world.dist, world.positions, goals, nullptr, pc);
+    ++solver_calls_;
+    nodes_ += r.nodes;
+    sipp_calls_ += r.sipp_calls;
+    solver_time_sum_ += r.time_s;
+    solver_time_max_ = std::max(solver_time_max_, r.time_s);
+    report = {true, r.time_s};
+    have_plan_ = r.success;
+    if (r.success) {
+      plan_ = std::move(r.paths);
+    } else {
+      ++solver_failures_;
+      if (r.timed_out) ++timeouts_;
+      plan_.clear();
+    }
+  }
+  if (have_plan_) {
+    const int k = world.timestep - plan_start_;
+    for (int i = 0; i < n; ++i) next[i] = plan_[i][std::min<size_t>(k + 1, plan_[i].size() - 1)];
+  } else {
+    pibt_.step(world, next);
+    ++fallback_steps_;
+  }
+  return report;
+}
+
+nlohmann::json RhcrPlanner::params() const {
+  return {{"H", cfg_.H},
+          {"alpha", cfg_.alpha},
+          {"timeout", cfg_.timeout_s},
+          {"node_budget", cfg_.node_budget},
+          {"solver", "pbs"},
+          {"fallback", "pibt"},
+          {"seed", seed_}};
+}
+
+nlohmann::json RhcrPlanner::stats() const {
+  return {{"solver_calls", solver_calls_},
+          {"solver_failures", solver_failures_},
+          {"solver_timeouts", timeouts_},
+          {"fallback_steps", fallback_steps_},
+          {"deviation_replans", deviation_replans_},
+          {"pbs_nodes", nodes_},
+          {"sipp_calls", sipp_calls_},
+          {"solver_time_mean_s", solver_calls_ ? solver_time_sum_ / solver_calls_ : 0.0},
+          {"solver_time_max_s", solver_time_max_}};
+}
+
+}  // namespace gdrhcr
