@@ -2,6 +2,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "gdrhcr/gd_rhcr.hpp"
 #include "gdrhcr/pibt.hpp"
 #include "gdrhcr/planner.hpp"
 #include "gdrhcr/rhcr.hpp"
@@ -25,6 +26,21 @@ const std::vector<std::pair<std::string, PlannerFactory>>& registry() {
          if (!(c.timeout_s > 0)) throw ParamError("parameter timeout must be > 0 seconds");
          c.node_budget = p.get_int("node-budget", 0, 0, 2000000000);
          return std::make_unique<RhcrPlanner>(grid, n, seed, c);
+       }},
+      {"gd-rhcr",
+       [](Params& p, const Grid& grid, int n, uint64_t seed) -> std::unique_ptr<Planner> {
+         GdRhcrConfig c;
+         c.V = p.get_int("V", c.V, 0, 1 << 20);
+         c.H = p.get_int("H", c.H, 1, 100000);
+         c.c_soft = p.get_double("c-soft", c.c_soft, 0.0, 1e9);
+         c.k_threshold = p.get_int("k-threshold", 0, 1, 1 << 30);
+         c.timeout_s = p.get_double("timeout", c.timeout_s, 0, 1e9);
+         if (!(c.timeout_s > 0)) throw ParamError("parameter timeout must be > 0 seconds");
+         c.node_budget = p.get_int("node-budget", 0, 0, 2000000000);
+         c.threads = p.get_int("threads", c.threads, 1, 1024);
+         c.solver = p.get_choice("solver", c.solver, {"pbs", "pibt"});
+         c.solver2 = p.get_choice("solver2", c.solver2, {"pibt"});
+         return std::make_unique<GdRhcrPlanner>(grid, n, seed, c);
        }},
   };
   return planners;

@@ -1,0 +1,102 @@
+// GD-RHCR: Group Decentralized Rolling-Horizon Collision Resolution.
+// DeWeese, Li, Qu, "A Theoretical Framework for Parallel Lifelong MAPF Using Group
+// Decentralized Planning" (Algorithm 1, section "Our Method").
+//
+// Every timestep: partition agents into groups (shortest-path distance <= V, transitively);
+// a group whose agents all still follow one cached plan reuses it (lazy evaluation); otherwise
+// it is replanned by the primary solver (PBS over SIPP, window H) with the other groups' plans
+// from the end of the previous step as soft constraints of cost c_soft; groups of at least
+// K_threshold agents, and groups whose primary solve fails or times out, are moved by the
+// secondary solver (PIBT). Groups replanned in one step are solved concurrently on a oneTBB
+// thread pool.
+//
+// Safety: for V >= 2 the paper's Dependence Time Lemma keeps groups planned apart from
+// colliding in the next step. For any V, a final check runs on the assembled step; conflicting
+// groups (and any group whose fixed move enters their cells) are re-moved together by PIBT,
+// so an executed step is never in collision.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "gdrhcr/group_partition.hpp"
+#include "gdrhcr/pibt.hpp"
+#include "gdrhcr/planner.hpp"
+
+namespace gdrhcr {
+
+struct GdRhcrConfig {
+  int V = 2;                  // visibility: link agents at shortest-path distance <= V
+  int H = 20;                 // planning window of the primary solver
+  double c_soft = 1.0;        // cost of a conflict with another group's plan
+  int k_threshold = 0;        // groups this large go to the secondary solver; 0 = the paper's
+                              // default min(floor(0.1 k), 20), floored at 2 (see .cpp)
+  double timeout_s = 60.0;    // wall-clock limit of one primary solve
+  long node_budget = 0;       // deterministic PBS node limit per solve; 0 = none
+  int threads = 1;            // thread-pool size for groups replanned in one step
+  std::string solver = "pbs";    // primary: pbs | pibt
+  std::string solver2 = "pibt";  // secondary: pibt
+};
+
+// Why a group was (re)planned this step, or not.
+enum class GroupAction { Reused, Primary, ThresholdFallback, FailureFallback, Repair };
+const char* to_string(GroupAction a);
+
+struct GroupInfo {
+  std::vector<int> agents;
+  GroupAction action = GroupAction::Reused;
+  double solve_time_s = 0;
+};
+
+class GdRhcrPlanner : public Planner {
+ public:
+  GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, GdRhcrConfig config);
+  ~GdRhcrPlanner() override;
+
+  std::string name() const override { return "gd-rhcr"; }
+  StepReport plan_step(const WorldView& world, std::vector<Cell>& next) override;
+  nlohmann::json params() const override;
+  nlohmann::json stats() const override;
+
+  // The groups of the last step, with what each did (for rviz and diagnostics).
+  const std::vector<GroupInfo>& last_groups() const { return last_groups_; }
+  // Agent i's planned cells from the current step on (its cached plan's remainder).
+  std::vector<Cell> planned_path(int agent) const;
+  int k_threshold() const { return k_threshold_; }
+
+ private:
+  struct Plan;
+  struct Job;
+  bool needs_replan(const WorldView& world, const std::vector<int>& group) const;
+  void solve_primary(const WorldView& world, Job& job) const;
+  void run_secondary(const WorldView& world, const std::vector<int>& agents,
+                     const std::vector<Cell>& next, std::vector<Cell>& out);
+  void adopt_one_step_plans(const WorldView& world, const std::vector<int>& agents,
+                            const std::vector<Cell>& next);
+  bool repair_step(const WorldView& world, std::vector<Cell>& next, std::vector<uint8_t>& repaired);
+  int offset_of(int agent, int t) const;
+
+  const Grid& grid_;
+  uint64_t seed_;
+  GdRhcrConfig cfg_;
+  int k_threshold_;
+  GroupPartition partition_;
+  PibtStep pibt_;
+  std::vector<std::shared_ptr<const Plan>> plan_of_;  // lambda_i: the plan agent i follows
+  std::vector<int> slot_of_;                          // agent i's row in that plan
+  long next_plan_id_ = 1;
+  int now_ = 0;  // the timestep of the last plan_step
+  std::vector<GroupInfo> last_groups_;
+  struct Arena;
+  std::unique_ptr<Arena> arena_;
+
+  // Statistics.
+  long steps_ = 0, group_count_sum_ = 0, max_group_sum_ = 0, agents_sum_ = 0;
+  long replanned_groups_ = 0, reused_groups_ = 0, primary_calls_ = 0;
+  long threshold_fallbacks_ = 0, failure_fallbacks_ = 0, timeouts_ = 0, repairs_ = 0;
+  long pbs_nodes_ = 0, soft_conflicts_ = 0, solved_steps_ = 0;
+  double plan_time_sum_all_steps_ = 0, primary_time_sum_ = 0;
+};
+
+}  // namespace gdrhcr

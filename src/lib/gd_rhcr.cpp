@@ -1,0 +1,399 @@
+#include "gdrhcr/gd_rhcr.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "gdrhcr/pbs.hpp"
+#include "gdrhcr/soft_constraint_table.hpp"
+#include "gdrhcr/validator.hpp"
+
+namespace gdrhcr {
+
+using Clock = std::chrono::steady_clock;
+
+const char* to_string(GroupAction a) {
+  switch (a) {
+    case GroupAction::Reused: return "reused";
+    case GroupAction::Primary: return "primary";
+    case GroupAction::ThresholdFallback: return "threshold_fallback";
+    case GroupAction::FailureFallback: return "failure_fallback";
+    case GroupAction::Repair: return "repair";
+  }
+  return "?";
+}
+
+// One solve's output, shared by every agent that follows it (the paper's lambda_i).
+// paths[slot][k] is the agent's cell at timestep start_time + k; steps k -> k+1 for
+// k < valid_steps are collision-free among the plan's agents.
+struct GdRhcrPlanner::Plan {
+  long id = 0;
+  int start_time = 0;
+  int valid_steps = 0;
+  std::vector<std::vector<Cell>> paths;
+  std::vector<std::vector<Cell>> goals;  // the goal sequence each agent was planned with
+};
+
+// A group replanned by the primary solver this step.
+struct GdRhcrPlanner::Job {
+  size_t group_index = 0;
+  const std::vector<int>* agents = nullptr;
+  PbsResult result;
+};
+
+struct GdRhcrPlanner::Arena {
+  explicit Arena(int threads) : arena(threads) {}
+  tbb::task_arena arena;
+};
+
+namespace {
+// The paper's default K_threshold = min(floor(0.1 k), 20). Below 20 agents that formula gives
+// 0 or 1 and would send every group, even a lone agent, to the secondary solver; the floor of 2
+// keeps single agents on the primary solver.
+int default_k_threshold(int num_agents) { return std::max(2, std::min(num_agents / 10, 20)); }
+}  // namespace
+
+GdRhcrPlanner::GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, GdRhcrConfig config)
+    : grid_(grid),
+      seed_(seed),
+      cfg_(std::move(config)),
+      k_threshold_(cfg_.k_threshold > 0 ? cfg_.k_threshold : default_k_threshold(num_agents)),
+      partition_(grid),
+      pibt_(grid, num_agents, seed),
+      plan_of_(num_agents),
+      slot_of_(num_agents, 0),
+      arena_(std::make_unique<Arena>(std::max(1, cfg_.threads))) {
+  if (cfg_.V < 0) throw ParamError("gd-rhcr: V must be >= 0, got " + std::to_string(cfg_.V));
+  if (cfg_.H < 1) throw ParamError("gd-rhcr: H must be >= 1, got " + std::to_string(cfg_.H));
+  if (!(cfg_.c_soft >= 0)) throw ParamError("gd-rhcr: c_soft must be >= 0");
+  if (cfg_.threads < 1) throw ParamError("gd-rhcr: threads must be >= 1");
+  if (!(cfg_.timeout_s > 0)) throw ParamError("gd-rhcr: timeout must be > 0");
+  if (cfg_.node_budget < 0) throw ParamError("gd-rhcr: node budget must be >= 0");
+  if (cfg_.solver != "pbs" && cfg_.solver != "pibt")
+    throw ParamError("gd-rhcr: solver must be pbs or pibt, got '" + cfg_.solver + "'");
+  if (cfg_.solver2 != "pibt")
+    throw ParamError("gd-rhcr: solver2 must be pibt, got '" + cfg_.solver2 + "'");
+}
+
+GdRhcrPlanner::~GdRhcrPlanner() = default;
+
+int GdRhcrPlanner::offset_of(int agent, int t) const {
+  return plan_of_[agent] ? t - plan_of_[agent]->start_time : 0;
+}
+
+std::vector<Cell> GdRhcrPlanner::planned_path(int agent) const {
+  const auto& plan = plan_of_.at(agent);
+  if (!plan) return {};
+  const auto& path = plan->paths[slot_of_[agent]];
+  const int from = std::clamp(now_ - plan->start_time, 0, static_cast<int>(path.size()) - 1);
+  return std::vector<Cell>(path.begin() + from, path.end());
+}
+
+// Algorithm 1's lazy test: replan when the agents' plans come from different solves (someone
+// joined), when the plan is exhausted, and also, beyond the paper, when an agent is not where
+// its plan says (a lagging robot) or its current goal was not among the goals the plan was made
+// for (a task that arrived after the plan, as in the ROS node where future tasks are unknown).
+bool GdRhcrPlanner::needs_replan(const WorldView& world, const std::vector<int>& group) const {
+  const int t = world.timestep;
+  const Plan* first = plan_of_[group[0]].get();
+  if (!first) return true;
+  for (int i : group) {
+    const Plan* p = plan_of_[i].get();
+    if (p != first) return true;
+    const int k = t - p->start_time;
+    if (k < 0 || k >= p->valid_steps) return true;
+    const auto& path = p->paths[slot_of_[i]];
+    if (k + 1 >= static_cast<int>(path.size()) || path[k] != world.positions[i]) return true;
+    const Cell goal = world.goals[i].empty() ? kNoCell : world.goals[i][0];
+    const auto& planned_goals = p->goals[slot_of_[i]];
+    if (goal != kNoCell && std::find(planned_goals.begin(), planned_goals.end(), goal) == planned_goals.end())
+      return true;
+  }
+  return false;
+}
+
+void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
+  const std::vector<int>& agents = *job.agents;
+  const int t = world.timestep;
+  // Soft constraints: the plans of agents outside the group as they stood at the end of the
+  // previous step (plan_of_ is not written during the parallel phase). Only agents that could
+  // meet the group within H steps matter: Manhattan distance (a lower bound on the path
+  // distance) at most 2H from the group's bounding box.
+  SoftConstraintTable soft(grid_);
+  if (cfg_.c_soft > 0) {
+    int x0 = grid_.width(), x1 = -1, y0 = grid_.height(), y1 = -1;
+    for (int i : agents) {
+      x0 = std::min(x0, grid_.x_of(world.positions[i]));
+      x1 = std::max(x1, grid_.x_of(world.positions[i]));
+      y0 = std::min(y0, grid_.y_of(world.positions[i]));
+      y1 = std::max(y1, grid_.y_of(world.positions[i]));
+    }
+    const int margin = 2 * cfg_.H;
+    const int my_group = partition_.group_of(agents[0]);
+    std::vector<Cell> rest;
+    for (int j = 0; j < world.num_agents(); ++j) {
+      if (partition_.group_of(j) == my_group) continue;
+      const int x = grid_.x_of(world.positions[j]), y = grid_.y_of(world.positions[j]);
+      if (x < x0 - margin || x > x1 + margin || y < y0 - margin || y > y1 + margin) continue;
+      rest.clear();
+      const Plan* p = plan_of_[j].get();
+      const int k = p ? t - p->start_time : -1;
+      if (p && k >= 0 && k < static_cast<int>(p->paths[slot_of_[j]].size()) &&
+          p->paths[slot_of_[j]][k] == world.positions[j]) {
+        const auto& path = p->paths[slot_of_[j]];
+        const int end = std::min<int>(path.size(), k + cfg_.H + 1);
+        rest.assign(path.begin() + k, path.begin() + end);
+      } else {
+        rest.push_back(world.positions[j]);  // no usable plan: expected to stay
+      }
+      soft.add_path(rest);
+    }
+  }
+  std::vector<Cell> starts;
+  std::vector<std::vector<Cell>> goals;
+  for (int i : agents) {
+    starts.push_back(world.positions[i]);
+    goals.push_back(world.goals[i]);
+  }
+  PbsConfig pc;
+  pc.horizon = cfg_.H;
+  pc.c_soft = cfg_.c_soft;
+  pc.time_limit_s = cfg_.timeout_s;
+  pc.node_budget = cfg_.node_budget;
+  job.result = solve_pbs(grid_, world.dist, starts, goals, soft.empty() ? nullptr : &soft, pc);
+}
+
+void GdRhcrPlanner::adopt_one_step_plans(const WorldView& world, const std::vector<int>& agents,
+                                         const std::vector<Cell>& next) {
+  // Each group moved by the secondary solver gets a one-step plan of its own, so it is
+  // reconsidered (and possibly handed back to the primary solver) at the next step.
+  std::vector<int> by_group(agents);
+  std::sort(by_group.begin(), by_group.end(), [&](int a, int b) {
+    return partition_.group_of(a) < partition_.group_of(b);
+  });
+  for (size_t s = 0; s < by_group.size();) {
+    size_t e = s;
+    auto plan = std::make_shared<Plan>();
+    plan->id = next_plan_id_++;
+    plan->start_time = world.timestep;
+    plan->valid_steps = 1;
+    while (e < by_group.size() && partition_.group_of(by_group[e]) == partition_.group_of(by_group[s])) {
+      const int i = by_group[e];
+      slot_of_[i] = static_cast<int>(plan->paths.size());
+      plan->paths.push_back({world.positions[i], next[i]});
+      plan->goals.push_back(world.goals[i]);
+      ++e;
+    }
+    for (size_t k = s; k < e; ++k) plan_of_[by_group[k]] = plan;
+    s = e;
+  }
+}
+
+// Moves `agents` with PIBT while every other agent keeps the move in `out`.
+void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>& agents,
+                                  const std::vector<Cell>& fixed_next, std::vector<Cell>& out) {
+  std::vector<uint8_t> in_set(world.num_agents(), 0);
+  for (int i : agents) in_set[i] = 1;
+  std::vector<std::pair<Cell, Cell>> fixed;
+  for (int j = 0; j < world.num_agents(); ++j)
+    if (!in_set[j] && fixed_next[j] != kNoCell) fixed.emplace_back(world.positions[j], fixed_next[j]);
+  std::vector<Cell> moves(world.num_agents(), kNoCell);
+  pibt_.step(world, moves, agents, fixed);
+  for (int i : agents) out[i] = moves[i];
+}
+
+// The final check: if the assembled step has a collision (possible only for V < 2 or with
+// stale plans), the groups involved are re-moved together by PIBT with every other move fixed;
+// groups whose fixed move enters a re-moved agent's cell join them (PIBT must be free to keep
+// an agent in place). Returns true when anything was repaired.
+bool GdRhcrPlanner::repair_step(const WorldView& world, std::vector<Cell>& next,
+                                std::vector<uint8_t>& repaired) {
+  StepValidator validator(grid_);
+  bool any = false;
+  for (;;) {
+    auto v = validator.check(world.positions, next);
+    if (!v) return any;
+    any = true;
+    std::vector<uint8_t> in_set(world.num_agents(), 0);
+    std::vector<int> agents;
+    auto add_group = [&](int a) {
+      if (a < 0 || in_set[a]) return;
+      for (int m : partition_.groups()[partition_.group_of(a)])
+        if (!in_set[m]) in_set[m] = 1, agents.push_back(m);
+    };
+    for (int i = 0; i < world.num_agents(); ++i)
+      if (repaired[i]) add_group(i);
+    add_group(v->agent_a);
+    add_group(v->agent_b);
+    // Closure: a fixed agent moving into a cell where a re-moved agent stands joins the set.
+    std::vector<int> agent_at(grid_.num_cells(), -1);
+    for (int i = 0; i < world.num_agents(); ++i) agent_at[world.positions[i]] = i;
+    for (bool grew = true; grew;) {
+      grew = false;
+      for (int j = 0; j < world.num_agents(); ++j) {
+        if (in_set[j]) continue;
+        const int k = agent_at[next[j]];
+        if (k >= 0 && k != j && in_set[k]) add_group(j), grew = true;
+      }
+    }
+    std::vector<Cell> fixed_next(next);
+    for (int i : agents) fixed_next[i] = kNoCell;
+    run_secondary(world, agents, fixed_next, next);
+    for (int i : agents) repaired[i] = 1;
+    ++repairs_;
+  }
+}
+
+StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& next) {
+  const int n = world.num_agents();
+  const int t = world.timestep;
+  now_ = t;
+  partition_.compute(world.positions, cfg_.V);
+  const auto& groups = partition_.groups();
+
+  last_groups_.assign(groups.size(), GroupInfo{});
+  std::vector<Job> jobs;
+  std::vector<int> secondary;  // agents moved by PIBT this step, with why
+  std::vector<size_t> threshold_groups;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    last_groups_[g].agents = groups[g];
+    if (static_cast<int>(groups[g].size()) >= k_threshold_ || cfg_.solver == "pibt") {
+      last_groups_[g].action = GroupAction::ThresholdFallback;
+      threshold_groups.push_back(g);
+    } else if (needs_replan(world, groups[g])) {
+      last_groups_[g].action = GroupAction::Primary;
+      jobs.push_back(Job{g, &groups[g], {}});
+    } else {
+      last_groups_[g].action = GroupAction::Reused;
+    }
+  }
+
+  // Primary solves, in parallel; each reads only the plans as they stood before this step.
+  // Larger groups first so the slowest solve starts early.
+  std::vector<size_t> order(jobs.size());
+  for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return jobs[a].agents->size() > jobs[b].agents->size();
+  });
+  arena_->arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 1),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                        for (size_t k = r.begin(); k != r.end(); ++k) solve_primary(world, jobs[order[k]]);
+                      });
+  });
+
+  // Adopt the solved plans; failed solves fall back to the secondary solver.
+  double step_max_time = 0;
+  for (Job& job : jobs) {
+    ++primary_calls_;
+    pbs_nodes_ += job.result.nodes;
+    primary_time_sum_ += job.result.time_s;
+    step_max_time = std::max(step_max_time, job.result.time_s);
+    last_groups_[job.group_index].solve_time_s = job.result.time_s;
+    if (job.result.timed_out) ++timeouts_;
+    if (!job.result.success) {
+      ++failure_fallbacks_;
+      last_groups_[job.group_index].action = GroupAction::FailureFallback;
+      threshold_groups.push_back(job.group_index);
+      continue;
+    }
+    soft_conflicts_ += job.result.soft_conflicts;
+    auto plan = std::make_shared<Plan>();
+    plan->id = next_plan_id_++;
+    plan->start_time = t;
+    plan->valid_steps = cfg_.H;
+    plan->paths = std::move(job.result.paths);
+    for (size_t s = 0; s < job.agents->size(); ++s) {
+      const int i = (*job.agents)[s];
+      plan->goals.push_back(world.goals[i]);
+      plan_of_[i] = plan;
+      slot_of_[i] = static_cast<int>(s);
+    }
+  }
+
+  // Every agent on a (new or cached) multi-step plan takes its next planned cell.
+  std::fill(next.begin(), next.end(), kNoCell);
+  std::vector<uint8_t> on_secondary(n, 0);
+  for (size_t g : threshold_groups)
+    for (int i : groups[g]) on_secondary[i] = 1, secondary.push_back(i);
+  for (int i = 0; i < n; ++i) {
+    if (on_secondary[i]) continue;
+    const auto& path = plan_of_[i]->paths[slot_of_[i]];
+    const int k = t - plan_of_[i]->start_time;
+    next[i] = path[std::min<int>(k + 1, path.size() - 1)];
+  }
+  if (!secondary.empty()) {
+    const auto t0 = Clock::now();
+    run_secondary(world, secondary, next, next);
+    const double dt = std::chrono::duration<double>(Clock::now() - t0).count();
+    step_max_time = std::max(step_max_time, dt);  // one PIBT call covers all those groups
+    for (size_t g : threshold_groups) last_groups_[g].solve_time_s += dt;
+  }
+  for (size_t g = 0; g < groups.size(); ++g) {
+    if (last_groups_[g].action == GroupAction::ThresholdFallback) ++threshold_fallbacks_;
+  }
+
+  // Final check; repaired agents get one-step plans like the secondary solver's.
+  std::vector<uint8_t> repaired(n, 0);
+  if (repair_step(world, next, repaired)) {
+    for (int i = 0; i < n; ++i)
+      if (repaired[i] && !on_secondary[i]) on_secondary[i] = 1, secondary.push_back(i);
+    for (auto& info : last_groups_)
+      if (repaired[info.agents[0]]) info.action = GroupAction::Repair;
+  }
+  adopt_one_step_plans(world, secondary, next);
+
+  // Statistics.
+  const bool solved = !jobs.empty() || !secondary.empty();
+  ++steps_;
+  group_count_sum_ += static_cast<long>(groups.size());
+  agents_sum_ += n;
+  size_t max_size = 0;
+  for (auto& g : groups) max_size = std::max(max_size, g.size());
+  max_group_sum_ += static_cast<long>(max_size);
+  replanned_groups_ += static_cast<long>(jobs.size());
+  for (auto& info : last_groups_) reused_groups_ += info.action == GroupAction::Reused;
+  plan_time_sum_all_steps_ += step_max_time;
+  if (solved) ++solved_steps_;
+  return {solved, step_max_time};
+}
+
+nlohmann::json GdRhcrPlanner::params() const {
+  return {{"V", cfg_.V},
+          {"H", cfg_.H},
+          {"c_soft", cfg_.c_soft},
+          {"k_threshold", k_threshold_},
+          {"k_threshold_rule", cfg_.k_threshold > 0 ? "given" : "max(2, min(floor(0.1 k), 20))"},
+          {"timeout_s", cfg_.timeout_s},
+          {"node_budget", cfg_.node_budget},
+          {"threads", cfg_.threads},
+          {"solver", cfg_.solver},
+          {"solver2", cfg_.solver2},
+          {"seed", seed_}};
+}
+
+nlohmann::json GdRhcrPlanner::stats() const {
+  const double s = steps_ > 0 ? double(steps_) : 1.0;
+  return {{"groups",
+           {{"mean_count", group_count_sum_ / s},
+            {"mean_size", group_count_sum_ ? double(agents_sum_) / group_count_sum_ : 0.0},
+            {"mean_max_size", max_group_sum_ / s},
+            {"replanned_per_step", replanned_groups_ / s},
+            {"reused_per_step", reused_groups_ / s}}},
+          {"cache_reuses", reused_groups_},
+          {"primary_calls", primary_calls_},
+          {"primary_time_mean_s", primary_calls_ ? primary_time_sum_ / primary_calls_ : 0.0},
+          {"pbs_nodes", pbs_nodes_},
+          {"soft_conflicts_in_plans", soft_conflicts_},
+          {"threshold_fallbacks", threshold_fallbacks_},
+          {"failure_fallbacks", failure_fallbacks_},
+          {"timeouts", timeouts_},
+          {"repairs", repairs_},
+          {"steps_with_a_solve", solved_steps_},
+          {"plan_time_mean_all_steps_s", plan_time_sum_all_steps_ / s}};
+}
+
+}  // namespace gdrhcr
