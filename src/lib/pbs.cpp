@@ -108,6 +108,7 @@ class PbsSearch {
     std::vector<std::pair<int, int>> changed;  // (agent, path id) replanned in this node
     int collisions;
     double cost;
+    int depth;
   };
 
   bool out_of_limits() {
@@ -130,6 +131,7 @@ class PbsSearch {
   void activate(int node);
   bool generate_child(int parent, int hi, int lo);
   double total_cost() const;
+  int relevant_depth(int node, const PbsCollision& c);
 
   const Grid& grid_;
   const SoftConstraintTable* soft_;
@@ -243,7 +245,7 @@ bool PbsSearch::generate_child(int parent, int hi, int lo) {
       if (mark_[b] == mark_stamp_ && --indeg_[b] == 0) order_.push_back(b);
   std::vector<int> topo = order_;
 
-  Node child{parent, hi, lo, {}, 0, 0};
+  Node child{parent, hi, lo, {}, 0, 0, nodes_[parent].depth + 1};
   std::vector<std::pair<int, int>> undo;  // (agent, previous path id)
   bool ok = true;
   for (int k : topo) {
@@ -266,6 +268,24 @@ bool PbsSearch::generate_child(int parent, int hi, int lo) {
   return true;
 }
 
+// The depth of the deepest decision on the active node's chain that added an order onto, or
+// replanned, one of a, b or their ancestors: the latest decision the dead end depends on.
+int PbsSearch::relevant_depth(int node, const PbsCollision& c) {
+  ++mark_stamp_;
+  queue_.assign({c.a, c.b});
+  mark_[c.a] = mark_[c.b] = mark_stamp_;
+  for (size_t i = 0; i < queue_.size(); ++i)
+    for (int h : higher_[queue_[i]])
+      if (mark_[h] != mark_stamp_) mark_[h] = mark_stamp_, queue_.push_back(h);
+  for (int x = node; x > 0; x = nodes_[x].parent) {
+    const Node& d = nodes_[x];
+    bool relevant = mark_[d.lo] == mark_stamp_;
+    for (auto& [k, id] : d.changed) relevant = relevant || mark_[k] == mark_stamp_;
+    if (relevant) return d.depth;
+  }
+  return 0;
+}
+
 void PbsSearch::run(PbsResult& out) {
   // Root: every agent on its own (soft constraints only).
   ws_.table->clear();
@@ -278,7 +298,7 @@ void PbsSearch::run(PbsResult& out) {
     cur_[k] = id;
   }
   root_paths_ = cur_;
-  nodes_.push_back({-1, -1, -1, {}, 0, total_cost()});
+  nodes_.push_back({-1, -1, -1, {}, 0, total_cost(), 0});
   active_ = 0;
   std::vector<int> stack = {0};
   while (!stack.empty()) {
@@ -320,6 +340,9 @@ void PbsSearch::run(PbsResult& out) {
       stack.push_back(x_first ? before : before + 1);
     } else if (made == 1) {
       stack.push_back(before);
+    } else if (cfg_.backjump) {
+      const int keep = relevant_depth(node, c);
+      while (!stack.empty() && nodes_[stack.back()].depth > keep) stack.pop_back();
     }
   }
   out.nodes = static_cast<long>(nodes_.size());

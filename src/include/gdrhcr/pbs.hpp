@@ -11,6 +11,15 @@
 // now collides with a higher one. Agents with no order between them may collide; that is what
 // later branches resolve. Success = a node with no collision inside the window.
 //
+// Backjumping (our addition, on by default): a node is a dead end when neither order of its
+// collision (a, b) can be planned. That failure depends only on a, b, their ancestors and the
+// paths of those; the decisions below the deepest one that touched that set (added an order
+// onto it or replanned one of its agents) leave it as it was, so their siblings would keep
+// meeting the same dead end. The search jumps straight back to that decision's sibling instead
+// of trying them all, which turns rare multi-second thrashing into quick failures or
+// successes. Like PBS itself this is incomplete: a skipped subtree could in principle change
+// one of those paths before reaching the collision again.
+//
 // Limits: a wall-clock time limit and a deterministic node budget (nodes generated, the root
 // included), so tests and benchmarks do not depend on machine speed.
 //
@@ -31,6 +40,7 @@ struct PbsConfig {
   double c_soft = 1.0;        // cost per conflict with the soft table (ignored when it is null)
   double time_limit_s = 60.0;
   long node_budget = 0;       // 0 = unlimited
+  bool backjump = true;       // skip siblings that cannot undo a dead end (see above)
 };
 
 struct PbsResult {
