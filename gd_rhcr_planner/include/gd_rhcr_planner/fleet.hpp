@@ -1,0 +1,121 @@
+// The ROS-free bookkeeping of the planner node: tasks (queued -> assigned -> picked ->
+// delivered, or failed/cancelled), the robots' latest reported cells, nearest-idle-robot
+// assignment by the core's DistTable, each robot's goal sequence for the planner's WorldView,
+// and the safety cascade that holds robots in place behind robots that cannot move.
+// Unit-tested without a ROS master (test/fleet_test.cpp).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "gdrhcr/dist_table.hpp"
+#include "gdrhcr/grid.hpp"
+
+namespace gd_rhcr_planner {
+
+using gdrhcr::Cell;
+
+// Same values as gd_rhcr_msgs/TaskStatus and RobotState.
+enum TaskState : uint8_t { kQueued = 0, kAssigned = 1, kPicked = 2, kDelivered = 3, kFailed = 4, kCancelled = 5 };
+enum RobotMode : uint8_t { kIdle = 0, kToPickup = 1, kToDelivery = 2, kOffline = 3 };
+const char* task_state_name(uint8_t s);
+inline bool task_finished(uint8_t s) { return s == kDelivered || s == kFailed || s == kCancelled; }
+
+struct TaskRecord {
+  uint64_t id = 0;
+  int pickup_x = 0, pickup_y = 0, delivery_x = 0, delivery_y = 0;
+  Cell pickup = gdrhcr::kNoCell, delivery = gdrhcr::kNoCell;
+  int priority = 0;
+  uint8_t state = kQueued;
+  int robot = -1;
+  std::string reason;
+};
+
+struct TaskEvent {  // one status transition, to publish on task_status
+  uint64_t task_id;
+  uint8_t state;
+  int robot;
+  std::string reason;
+};
+
+struct SubmitResult {
+  bool accepted = false;
+  uint64_t task_id = 0;
+  std::string reason;
+};
+
+struct RobotRecord {
+  bool reported = false;
+  Cell cell = gdrhcr::kNoCell;
+  bool offline = false;
+  bool moving = false;
+  int64_t task = -1;
+};
+
+class Fleet {
+ public:
+  Fleet(const gdrhcr::Grid& grid, const gdrhcr::DistTable& dist, int num_robots);
+
+  int num_robots() const { return static_cast<int>(robots_.size()); }
+  // Validates and queues a task (requested_id 0 = a fresh id). A rejected task is kept as
+  // FAILED with the reason (so ListTasks shows it) and a FAILED event is emitted.
+  SubmitResult submit(int pickup_x, int pickup_y, int delivery_x, int delivery_y, int priority,
+                      uint64_t requested_id = 0);
+  bool cancel(uint64_t task_id, std::string& reason);
+  // A robot's report. Returns false with `error` set for an unknown id or a cell that is off
+  // the map or blocked; the report is then ignored.
+  bool update_robot(int64_t id, int x, int y, bool offline, bool moving, std::string& error);
+  bool all_reported() const;
+  int missing_robots() const;
+  // Robots on the same cell (a report error); empty when the positions are consistent.
+  std::string position_conflict() const;
+
+  // Status transitions from the robots' cells (picked, delivered; tasks of robots that went
+  // offline), then greedy assignment of queued tasks to the nearest idle robots.
+  void advance();
+  // Goal sequences for the WorldView: to-pickup robots [pickup, delivery], to-delivery robots
+  // [delivery], idle and offline robots [their cell].
+  void fill_goals(std::vector<std::vector<Cell>>& goals) const;
+  void fill_positions(std::vector<Cell>& positions) const;
+  uint8_t mode(int robot) const;
+  int64_t task_of(int robot) const { return robots_[robot].task; }
+  const RobotRecord& robot(int r) const { return robots_[r]; }
+
+  std::vector<TaskEvent> take_events();
+  const TaskRecord* task(uint64_t id) const;
+  const std::map<uint64_t, TaskRecord>& tasks() const { return tasks_; }
+  // Cells still to travel for an active task (-1 when unknown or finished).
+  int distance_left(uint64_t id) const;
+
+  size_t count_in_state(uint8_t s) const;
+  uint64_t delivered_total() const { return delivered_; }
+  uint64_t failed_total() const { return failed_; }
+  // Finished tasks beyond this many are forgotten (oldest first).
+  void set_finished_limit(size_t n) { finished_limit_ = n; }
+
+ private:
+  void set_state(TaskRecord& t, uint8_t s, int robot, const std::string& reason);
+  bool validate_cell(int x, int y, const char* what, Cell& out, std::string& reason) const;
+  void forget_old_finished();
+
+  const gdrhcr::Grid& grid_;
+  const gdrhcr::DistTable& dist_;
+  std::vector<RobotRecord> robots_;
+  std::map<uint64_t, TaskRecord> tasks_;
+  std::vector<uint64_t> finished_order_;
+  std::vector<TaskEvent> events_;
+  uint64_t next_id_ = 1;
+  uint64_t delivered_ = 0, failed_ = 0;
+  size_t finished_limit_ = 10000;
+};
+
+// The safety cascade: robots with held[i] set stay where they are; then every robot whose
+// planned next cell is the current cell of a held robot is held too, until nothing changes.
+// Holding only replaces moves by waits, so a valid plan stays free of swaps, and afterwards no
+// robot enters a cell whose occupant may not leave. Returns the number of robots held.
+int hold_cascade(const gdrhcr::Grid& grid, const std::vector<Cell>& pos, std::vector<Cell>& next,
+                 std::vector<uint8_t>& held);
+
+}  // namespace gd_rhcr_planner
