@@ -63,6 +63,7 @@ GdRhcrPlanner::GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, Gd
       k_threshold_(cfg_.k_threshold > 0 ? cfg_.k_threshold : default_k_threshold(num_agents)),
       partition_(grid),
       pibt_(grid, num_agents, seed),
+      validator_(grid),
       plan_of_(num_agents),
       slot_of_(num_agents, 0),
       arena_(std::make_unique<Arena>(std::max(1, cfg_.threads))) {
@@ -211,10 +212,9 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
 // an agent in place). Returns true when anything was repaired.
 bool GdRhcrPlanner::repair_step(const WorldView& world, std::vector<Cell>& next,
                                 std::vector<uint8_t>& repaired) {
-  StepValidator validator(grid_);
   bool any = false;
   for (;;) {
-    auto v = validator.check(world.positions, next);
+    auto v = validator_.check(world.positions, next);
     if (!v) return any;
     any = true;
     std::vector<uint8_t> in_set(world.num_agents(), 0);

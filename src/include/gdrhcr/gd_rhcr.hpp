@@ -23,6 +23,7 @@
 #include "gdrhcr/group_partition.hpp"
 #include "gdrhcr/pibt.hpp"
 #include "gdrhcr/planner.hpp"
+#include "gdrhcr/validator.hpp"
 
 namespace gdrhcr {
 
@@ -83,6 +84,7 @@ class GdRhcrPlanner : public Planner {
   int k_threshold_;
   GroupPartition partition_;
   PibtStep pibt_;
+  StepValidator validator_;  // the final check, with its per-cell scratch kept across steps
   std::vector<std::shared_ptr<const Plan>> plan_of_;  // lambda_i: the plan agent i follows
   std::vector<int> slot_of_;                          // agent i's row in that plan
   long next_plan_id_ = 1;
