@@ -42,9 +42,11 @@ SubmitResult Fleet::submit(int px, int py, int dx, int dy, int priority, uint64_
     return r;  // not recorded: the id belongs to the existing task
   }
   TaskRecord t;
-  t.id = requested_id ? requested_id : next_id_;
-  while (!requested_id && tasks_.count(t.id)) t.id = ++next_id_;
-  next_id_ = std::max(next_id_, t.id + 1);
+  t.id = requested_id;
+  if (!requested_id) {  // fresh ids count up from 1, skipping ids chosen by clients
+    while (tasks_.count(next_id_)) ++next_id_;
+    t.id = next_id_++;
+  }
   t.pickup_x = px, t.pickup_y = py, t.delivery_x = dx, t.delivery_y = dy;
   t.priority = priority;
   std::string reason;

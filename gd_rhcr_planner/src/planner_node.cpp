@@ -309,15 +309,6 @@ void PlannerNode::on_task(const gd_rhcr_msgs::Task::ConstPtr& msg) {
   std::lock_guard<std::mutex> lock(mutex_);
   auto r = fleet_->submit(msg->pickup_x, msg->pickup_y, msg->delivery_x, msg->delivery_y, msg->priority, msg->id);
   if (!r.accepted) ROS_WARN("task %lu rejected: %s", (unsigned long)r.task_id, r.reason.c_str());
-  if (!r.accepted && r.task_id == 0) {  // duplicate id: not recorded, report it anyway
-    gd_rhcr_msgs::TaskStatus st;
-    st.header.stamp = ros::Time::now();
-    st.task_id = msg->id;
-    st.state = kFailed;
-    st.robot_id = -1;
-    st.reason = "rejected: " + r.reason;
-    status_pub_.publish(st);
-  }
   publish_events_locked();
 }
 
