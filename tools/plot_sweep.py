@@ -4,8 +4,9 @@
 
     tools/plot_sweep.py results/paper.csv --out docs/figures [--title-prefix TEXT]
 
-Writes <out>/<map>_throughput.png, _plan_time.png, _wall_time.png and _groups.png (when the
-CSV has group statistics), and prints the table of means it plotted.
+Writes <out>/<map>_throughput.png, _plan_time.png, _wall_time.png, _groups.png (when the
+CSV has group statistics) and _ablation.png (when labels read 'param=value', as in the
+ablation configs: one column of panels per parameter), and prints the table of means.
 """
 import argparse
 import csv
@@ -103,6 +104,26 @@ def plot_map(rows, name, out, prefix):
     return files
 
 
+def plot_ablation(rows, name, out, prefix):
+    """Labels of the form 'param=value' (ablation configs): one column per parameter, rows for
+    throughput and mean plan time, one line per value."""
+    params = sorted({r["label"].split("=", 1)[0] for r in rows if "=" in r["label"]})
+    if not params:
+        return []
+    fig, axes = plt.subplots(2, len(params), figsize=(4.2 * len(params), 6.4), squeeze=False)
+    for c, param in enumerate(params):
+        prows = [r for r in rows if r["label"].split("=", 1)[0] == param]
+        panel(axes[0][c], series(prows, "throughput"), "throughput [goals / step]")
+        panel(axes[1][c], series(prows, "plan_time_mean_s"), "mean plan time [s]", log=True)
+        axes[0][c].set_title("varying %s" % param, fontsize=9)
+    fig.suptitle("%s%s ablations (%s, mean and 1 SD)" % (prefix, name, seeds_steps(rows)), fontsize=10)
+    fig.tight_layout()
+    path = os.path.join(out, "%s_ablation.png" % name)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return [path]
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("csv")
@@ -115,7 +136,7 @@ def main(argv=None):
     for r in rows:
         by_map[os.path.splitext(os.path.basename(r["map"]))[0]].append(r)
     for name, mrows in sorted(by_map.items()):
-        for path in plot_map(mrows, name, args.out, args.title_prefix):
+        for path in plot_map(mrows, name, args.out, args.title_prefix) + plot_ablation(mrows, name, args.out, args.title_prefix):
             print("wrote", path)
         print("%s (%s)" % (name, seeds_steps(mrows)))
         print("  %-12s %7s %11s %9s %14s" % ("label", "agents", "throughput", "sd", "plan_time_s"))

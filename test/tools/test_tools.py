@@ -126,19 +126,19 @@ class PlotTest(unittest.TestCase):
             with open(path, "w", newline="") as f:
                 w = csv.DictWriter(f, fieldnames=gdrhcr_sweep.FIELDS)
                 w.writeheader()
-                for label in ("GD-RHCR", "PIBT"):
+                for label in ("GD-RHCR", "PIBT", "V=2", "V=4"):
                     for agents in (10, 20):
                         for seed in (0, 1):
                             row = {k: "" for k in gdrhcr_sweep.FIELDS}
                             row.update(label=label, map="maps/x.map", tasks="random", agents=agents,
                                        seed=seed, steps=50, status="ok", throughput=agents / 10 + seed,
                                        plan_time_mean_s=0.001 * agents, wall_time_s=1 + seed)
-                            if label == "GD-RHCR":
+                            if label != "PIBT":
                                 row.update(groups_mean_count=agents / 2, groups_mean_size=2, groups_mean_max_size=4)
                             w.writerow(row)
             out = os.path.join(tmp, "figs")
             self.assertEqual(plot_sweep.main([path, "--out", out]), 0)
-            for name in ("x_throughput.png", "x_plan_time.png", "x_wall_time.png", "x_groups.png"):
+            for name in ("x_throughput.png", "x_plan_time.png", "x_wall_time.png", "x_groups.png", "x_ablation.png"):
                 p = os.path.join(out, name)
                 self.assertTrue(os.path.exists(p), name)
                 with open(p, "rb") as f:
