@@ -44,6 +44,9 @@ SimResult run_simulation(const Grid& grid, const DistTable& dist, TaskStream& ta
   validator.require_valid(pos, pos, -1);
 
   std::vector<std::vector<Cell>> goals(n);
+  // from[i]: the cell agent i's current goal was drawn from. A goal equal to it (only an agent
+  // alone in a one-cell component gets one) is a task of length zero and is not counted.
+  std::vector<Cell> from = pos;
   for (int i = 0; i < n; ++i) {
     Cell last = pos[i];
     for (int k = 0; k < lookahead; ++k) goals[i].push_back(last = tasks.next_goal(i, last));
@@ -71,7 +74,8 @@ SimResult run_simulation(const Grid& grid, const DistTable& dist, TaskStream& ta
     pos.swap(next);
     for (int i = 0; i < n; ++i) {
       if (pos[i] != goals[i].front()) continue;
-      ++r.goals_reached;
+      if (goals[i].front() != from[i]) ++r.goals_reached;
+      from[i] = goals[i].front();
       goals[i].erase(goals[i].begin());
       goals[i].push_back(tasks.next_goal(i, goals[i].empty() ? pos[i] : goals[i].back()));
     }
@@ -97,6 +101,7 @@ double free_flow_throughput(const Grid& grid, const DistTable& dist, const TaskS
     long t = 0;
     for (;;) {
       const Cell g = replay->next_goal(i, cur);
+      if (g == cur) break;  // no other cell reachable: no task to count
       const int d = dist.get(g, cur);
       if (d >= kUnreachable) break;  // unreachable goal: the agent never gets there
       t += std::max(d, 1);

@@ -24,6 +24,12 @@ Cell draw_other_than(const std::vector<Cell>& set, Cell current, std::mt19937_64
   }
 }
 
+void require_free(const Grid& grid, int agent, Cell current, const char* stream) {
+  if (!grid.is_free(current))
+    throw std::invalid_argument(std::string(stream) + " task stream: agent " + std::to_string(agent) +
+                                " is at " + grid.describe(current) + ", which is not a free cell");
+}
+
 void grow_rngs(std::vector<std::mt19937_64>& rngs, int agent, uint64_t seed, uint64_t salt) {
   if (agent < 0) throw std::out_of_range("task stream: negative agent id");
   while (static_cast<int>(rngs.size()) <= agent)
@@ -40,35 +46,98 @@ std::mt19937_64& RandomNavigationStream::rng(int agent) {
 }
 
 Cell RandomNavigationStream::next_goal(int agent, Cell current) {
-  return draw_other_than(grid_.free_cells(), current, rng(agent));
+  require_free(grid_, agent, current, "random");
+  // Only the current cell's component: any other goal could never be reached. On a connected
+  // map this list is free_cells() itself, so the sequences are those of a plain uniform draw.
+  return draw_other_than(grid_.component_cells(grid_.component(current)), current, rng(agent));
 }
 
 std::unique_ptr<TaskStream> RandomNavigationStream::clone_fresh() const {
   return std::make_unique<RandomNavigationStream>(grid_, seed_);
 }
 
+void check_mapd_cells(const Grid& grid, const std::vector<Cell>& pickups,
+                      const std::vector<Cell>& deliveries) {
+  if (pickups.empty() || deliveries.empty())
+    throw std::invalid_argument("MAPD task stream needs at least one pickup and one delivery cell");
+  for (auto* set : {&pickups, &deliveries})
+    for (Cell c : *set)
+      if (!grid.is_free(c))
+        throw std::invalid_argument("MAPD " + std::string(set == &pickups ? "pickup" : "delivery") +
+                                    " cell " + grid.describe(c) + " is not a free cell");
+  std::vector<char> has_pickup(grid.count_components(), 0), has_delivery(grid.count_components(), 0);
+  for (Cell c : pickups) has_pickup[grid.component(c)] = 1;
+  for (Cell c : deliveries) has_delivery[grid.component(c)] = 1;
+  for (Cell c : pickups)
+    if (!has_delivery[grid.component(c)])
+      throw std::invalid_argument(
+          "MAPD pickup cell " + grid.describe(c) + " cannot reach any delivery cell (its region of " +
+          std::to_string(grid.component_cells(grid.component(c)).size()) +
+          " free cells has none; the map has " + std::to_string(grid.count_components()) +
+          " separate regions)");
+  for (Cell c : deliveries)
+    if (!has_pickup[grid.component(c)])
+      throw std::invalid_argument(
+          "MAPD delivery cell " + grid.describe(c) + " cannot reach any pickup cell (its region of " +
+          std::to_string(grid.component_cells(grid.component(c)).size()) +
+          " free cells has none; the map has " + std::to_string(grid.count_components()) +
+          " separate regions)");
+}
+
 PickupDeliveryStream::PickupDeliveryStream(const Grid& grid, std::vector<Cell> pickups,
                                            std::vector<Cell> deliveries, uint64_t seed)
     : grid_(grid), pickups_(std::move(pickups)), deliveries_(std::move(deliveries)), seed_(seed) {
-  if (pickups_.empty() || deliveries_.empty())
-    throw std::invalid_argument("MAPD task stream needs at least one pickup and one delivery cell");
-  for (auto* set : {&pickups_, &deliveries_})
-    for (Cell c : *set)
-      if (!grid.is_free(c))
-        throw std::invalid_argument("MAPD cell " + grid.describe(c) + " is not a free cell");
+  check_mapd_cells(grid, pickups_, deliveries_);
+  pickups_by_component_.resize(grid.count_components());
+  deliveries_by_component_.resize(grid.count_components());
+  for (Cell c : pickups_) pickups_by_component_[grid.component(c)].push_back(c);
+  for (Cell c : deliveries_) deliveries_by_component_[grid.component(c)].push_back(c);
 }
 
 Cell PickupDeliveryStream::next_goal(int agent, Cell current) {
+  require_free(grid_, agent, current, "MAPD");
   grow_rngs(rngs_, agent, seed_, 0x4d415044ULL);
   if (static_cast<int>(next_is_delivery_.size()) <= agent) next_is_delivery_.resize(agent + 1, 0);
   const bool delivery = next_is_delivery_[agent];
+  const int comp = grid_.component(current);
+  const std::vector<Cell>& set = (delivery ? deliveries_by_component_ : pickups_by_component_)[comp];
+  // check_mapd_cells guarantees a delivery wherever there is a pickup and vice versa, so this
+  // can only happen for an agent's first goal, drawn from its start.
+  if (set.empty())
+    throw std::invalid_argument(
+        "MAPD: agent " + std::to_string(agent) + " at " + grid_.describe(current) +
+        " cannot reach any " + (delivery ? "delivery" : "pickup") + " cell (its region of " +
+        std::to_string(grid_.component_cells(comp).size()) + " free cells has none; the map has " +
+        std::to_string(grid_.count_components()) +
+        " separate regions): start agents where tasks can reach them");
   next_is_delivery_[agent] = !delivery;
-  return draw_other_than(delivery ? deliveries_ : pickups_, current, rngs_[agent]);
+  return draw_other_than(set, current, rngs_[agent]);
 }
 
 std::unique_ptr<TaskStream> PickupDeliveryStream::clone_fresh() const {
   return std::make_unique<PickupDeliveryStream>(grid_, pickups_, deliveries_, seed_);
 }
+
+namespace {
+// Drops the cells of either set that cannot reach the other set (several components only).
+// Leaves the sets alone when that would empty one, so check_mapd_cells names a cell instead.
+void drop_unreachable(const Grid& grid, MapdCells& out) {
+  if (grid.count_components() == 1) return;
+  std::vector<char> has_pickup(grid.count_components(), 0), has_delivery(grid.count_components(), 0);
+  for (Cell c : out.pickups) has_pickup[grid.component(c)] = 1;
+  for (Cell c : out.deliveries) has_delivery[grid.component(c)] = 1;
+  std::vector<Cell> p, d;
+  for (Cell c : out.pickups) if (has_delivery[grid.component(c)]) p.push_back(c);
+  for (Cell c : out.deliveries) if (has_pickup[grid.component(c)]) d.push_back(c);
+  if (p.empty() || d.empty()) return;
+  const size_t dropped = out.pickups.size() - p.size() + out.deliveries.size() - d.size();
+  if (dropped == 0) return;
+  out.rule += "; " + std::to_string(dropped) +
+              " cells dropped that cannot reach a cell of the other set";
+  out.pickups = std::move(p);
+  out.deliveries = std::move(d);
+}
+}  // namespace
 
 MapdCells default_mapd_cells(const Grid& grid) {
   MapdCells out;
@@ -76,6 +145,7 @@ MapdCells default_mapd_cells(const Grid& grid) {
     out.pickups = grid.endpoints();
     out.deliveries = grid.homes();
     out.rule = "kiva: pickups = endpoints 'e', deliveries = homes 'r'";
+    drop_unreachable(grid, out);
     return out;
   }
   int min_x = grid.width(), max_x = -1;
@@ -104,6 +174,7 @@ MapdCells default_mapd_cells(const Grid& grid) {
     out.rule += " (no such cell: pickups = all free cells)";
   }
   if (out.deliveries.empty()) out.deliveries = grid.free_cells();
+  drop_unreachable(grid, out);
   return out;
 }
 
@@ -121,31 +192,36 @@ MapdCells mapd_cells_for_map(const Grid& grid, const std::string& map_path) {
 }
 
 std::vector<Cell> load_cell_list(const Grid& grid, const std::string& path) {
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw MapError(path + ": cannot open cell list");
+  return parse_cell_list(grid, in, path);
+}
+
+std::vector<Cell> parse_cell_list(const Grid& grid, std::istream& in, const std::string& name) {
   std::vector<Cell> cells;
   std::string line;
   for (int lineno = 1; std::getline(in, line); ++lineno) {
     if (auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
     std::replace(line.begin(), line.end(), ',', ' ');
+    const auto where = [&] { return name + ":" + std::to_string(lineno) + ": "; };
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     std::istringstream ls(line);
-    int x, y;
+    long long x, y;
     std::string rest;
-    if (!(ls >> x)) {
-      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-      throw MapError(path + ":" + std::to_string(lineno) + ": expected 'x y', got '" + line + "'");
-    }
-    if (!(ls >> y) || (ls >> rest))
-      throw MapError(path + ":" + std::to_string(lineno) + ": expected 'x y', got '" + line + "'");
-    if (!grid.in_bounds(x, y))
-      throw MapError(path + ":" + std::to_string(lineno) + ": cell (" + std::to_string(x) + "," +
-                     std::to_string(y) + ") is off the map");
-    if (!grid.is_free(grid.cell(x, y)))
-      throw MapError(path + ":" + std::to_string(lineno) + ": cell (" + std::to_string(x) + "," +
-                     std::to_string(y) + ") is an obstacle");
-    cells.push_back(grid.cell(x, y));
+    if (!(ls >> x) || !(ls >> y) || (ls >> rest))
+      throw MapError(where() + "expected 'x y', got '" + quote_input(line) + "'");
+    if (x < 0 || y < 0 || x >= grid.width() || y >= grid.height())
+      throw MapError(where() + "cell (" + std::to_string(x) + "," + std::to_string(y) +
+                     ") is off the map (" + std::to_string(grid.width()) + " x " +
+                     std::to_string(grid.height()) + ")");
+    const Cell c = grid.cell(static_cast<int>(x), static_cast<int>(y));
+    if (!grid.is_free(c))
+      throw MapError(where() + "cell (" + std::to_string(x) + "," + std::to_string(y) +
+                     ") is an obstacle");
+    cells.push_back(c);
   }
-  if (cells.empty()) throw MapError(path + ": no cells listed");
+  if (in.bad()) throw MapError(name + ": read error");
+  if (cells.empty()) throw MapError(name + ": no cells listed");
   return cells;
 }
 

@@ -32,10 +32,20 @@ class MapError : public std::runtime_error {
 // homes (`r`, robot start/workstation cells); MovingAI maps only have Travel.
 enum class CellKind : uint8_t { Obstacle, Travel, Endpoint, Home };
 
+// Text from an input file made safe to quote in an error message: non-printable bytes become
+// \xNN escapes and anything past `max_chars` is cut off with "...".
+std::string quote_input(const std::string& text, size_t max_chars = 60);
+
 class Grid {
  public:
+  // Largest map accepted, in cells (width * height): 2^24, e.g. 4096 x 4096. Bigger headers
+  // are rejected with a MapError before anything is allocated for them.
+  static constexpr int64_t kMaxCells = int64_t(1) << 24;
+
   // Reads a map file, choosing the format by its first line. Throws MapError.
   static Grid load(const std::string& path);
+  // The same on a stream: "type ..." first line = MovingAI, "rows,cols" = kiva.
+  static Grid parse(std::istream& in, const std::string& name);
   static Grid parse_movingai(std::istream& in, const std::string& name);
   static Grid parse_kiva(std::istream& in, const std::string& name);
   // Rows of characters with the MovingAI/kiva symbols; convenient for tests and generators.
@@ -73,7 +83,12 @@ class Grid {
   const std::vector<Cell>& endpoints() const { return endpoints_; }
   const std::vector<Cell>& homes() const { return homes_; }
   // Number of 4-connected components of the free cells.
-  int count_components() const;
+  int count_components() const { return static_cast<int>(component_cells_.size()); }
+  // The 4-connected component of free cell c (0 .. count_components()-1; -1 for an obstacle),
+  // and the free cells of a component in increasing cell order (for a connected map, the same
+  // list as free_cells()).
+  int component(Cell c) const { return valid_cell(c) ? component_[c] : -1; }
+  const std::vector<Cell>& component_cells(int id) const { return component_cells_[id]; }
   std::string describe(Cell c) const;  // "(x,y)"
 
  private:
@@ -86,6 +101,8 @@ class Grid {
   std::vector<Cell> adjacency_;  // 4 slots per cell
   std::vector<uint8_t> degree_;
   std::vector<Cell> free_cells_, endpoints_, homes_;
+  std::vector<int32_t> component_;                // per cell, -1 for obstacles
+  std::vector<std::vector<Cell>> component_cells_;
 };
 
 }  // namespace gdrhcr

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <istream>
 #include <memory>
 #include <random>
 #include <string>
@@ -21,13 +22,16 @@ class TaskStream {
   virtual ~TaskStream() = default;
   virtual std::string name() const = 0;
   // The next goal of `agent`, who stands at `current` (the goal always differs from it when the
-  // map allows). Called in order for each agent; agents are independent.
+  // map allows, and is always reachable from it). Called in order for each agent; agents are
+  // independent. Throws std::invalid_argument when `current` is not a free cell.
   virtual Cell next_goal(int agent, Cell current) = 0;
   // A fresh stream with the same seed and rules, at the start of every agent's sequence.
   virtual std::unique_ptr<TaskStream> clone_fresh() const = 0;
 };
 
-// Each new goal is a uniformly random free cell.
+// Each new goal is a uniformly random free cell of the current cell's 4-connected component
+// (other than the current cell), so goals are always reachable; on a connected map that is any
+// free cell. An agent alone in a one-cell component gets its own cell as goal, forever.
 class RandomNavigationStream : public TaskStream {
  public:
   RandomNavigationStream(const Grid& grid, uint64_t seed);
@@ -43,7 +47,14 @@ class RandomNavigationStream : public TaskStream {
 };
 
 // Multi-agent pickup and delivery: agents alternate pickup, delivery, pickup, ... each drawn
-// uniformly from its set. See `default_mapd_cells` for how the sets are chosen for a map.
+// uniformly from the cells of its set in the agent's 4-connected component. See
+// `default_mapd_cells` for how the sets are chosen for a map.
+//
+// Reachability rule: the constructor rejects (std::invalid_argument naming the cell) sets where
+// a pickup cannot reach any delivery or a delivery cannot reach any pickup; so once an agent has
+// a goal it never runs out of reachable goals. An agent that starts in a component without
+// pickups cannot be given a task: next_goal throws std::invalid_argument naming the agent and
+// its cell (the simulator asks for every agent's first goals before the first step).
 class PickupDeliveryStream : public TaskStream {
  public:
   PickupDeliveryStream(const Grid& grid, std::vector<Cell> pickups, std::vector<Cell> deliveries,
@@ -57,10 +68,17 @@ class PickupDeliveryStream : public TaskStream {
  private:
   const Grid& grid_;
   std::vector<Cell> pickups_, deliveries_;
+  // The sets split by component (in the given order), indexed by Grid::component.
+  std::vector<std::vector<Cell>> pickups_by_component_, deliveries_by_component_;
   uint64_t seed_;
   std::vector<std::mt19937_64> rngs_;
   std::vector<uint8_t> next_is_delivery_;
 };
+
+// Throws std::invalid_argument unless both sets are non-empty, every cell is free, every pickup
+// can reach some delivery and every delivery some pickup; the message names the first bad cell.
+void check_mapd_cells(const Grid& grid, const std::vector<Cell>& pickups,
+                      const std::vector<Cell>& deliveries);
 
 struct MapdCells {
   std::vector<Cell> pickups, deliveries;
@@ -74,6 +92,9 @@ struct MapdCells {
 //    (the stations of the MovingAI warehouse maps), pickups are the other free cells with an
 //    obstacle 4-neighbour inside the map (the cells in front of shelves). Where a set would be
 //    empty, it falls back to all free cells.
+// On a map with several components, cells of either set that cannot reach the other set are
+// dropped (and `rule` says how many), so the result passes check_mapd_cells when any component
+// holds both kinds.
 MapdCells default_mapd_cells(const Grid& grid);
 
 // The MAPD cells for a map file: side files `<map without .map>.pickups` and `.deliveries`
@@ -83,6 +104,8 @@ MapdCells mapd_cells_for_map(const Grid& grid, const std::string& map_path);
 // Reads a list of cells, one "x y" (or "x,y") per line, '#' comments allowed. Throws MapError
 // naming the line for a malformed entry, a cell off the map or on an obstacle.
 std::vector<Cell> load_cell_list(const Grid& grid, const std::string& path);
+// The same on a stream; `name` is used in messages.
+std::vector<Cell> parse_cell_list(const Grid& grid, std::istream& in, const std::string& name);
 
 // `count` distinct free cells drawn with `seed`. Throws std::invalid_argument when the map has
 // fewer free cells than agents.
