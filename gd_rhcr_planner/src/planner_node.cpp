@@ -721,6 +721,8 @@ void PlannerNode::on_diagnostics(const ros::TimerEvent&) {
 int main(int argc, char** argv) {
   ros::init(argc, argv, "gd_rhcr_planner");
   ros::NodeHandle nh, pnh("~");
+  // Declared before the node so it outlives the node: the tick timer lives on this queue.
+  ros::CallbackQueue tick_queue;
   gd_rhcr_planner::PlannerNode node(nh, pnh);
   try {
     node.init();
@@ -730,7 +732,6 @@ int main(int argc, char** argv) {
   }
   // Ticks run on their own queue and thread, so a long planning step never blocks services,
   // state updates or the action server (handled by the main thread).
-  ros::CallbackQueue tick_queue;
   node.start_timers(&tick_queue);
   ros::AsyncSpinner tick_spinner(1, &tick_queue);
   tick_spinner.start();
