@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 
 namespace gdrhcr {
@@ -33,9 +34,11 @@ double Params::get_double(const std::string& key, double fallback, double min, d
   double x = std::strtod(v->c_str(), &end);
   if (v->empty() || *end != '\0' || !std::isfinite(x))
     throw ParamError("parameter " + key + " must be a finite number, got '" + *v + "'");
-  if (x < min || x > max)
-    throw ParamError("parameter " + key + " must be in [" + std::to_string(min) + ", " +
-                     std::to_string(max) + "], got " + *v);
+  if (x < min || x > max) {
+    char range[64];
+    std::snprintf(range, sizeof range, "[%g, %g]", min, max);
+    throw ParamError("parameter " + key + " must be in " + range + ", got " + *v);
+  }
   return x;
 }
 

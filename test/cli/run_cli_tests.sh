@@ -67,5 +67,55 @@ expect_error "option without value" "needs a value" --map
 expect_error "duplicate option" "given twice" --map "$m" --map "$m"
 expect_error "positional argument" "unexpected argument" "$m"
 
+# Nonsense planner and run parameters: each rejected, naming the parameter.
+expect_error "gd-rhcr V < 0" "parameter V must be in \\[0," --map "$m" --planner gd-rhcr --V -1
+expect_error "gd-rhcr H < 1" "parameter H must be in \\[1," --map "$m" --planner gd-rhcr --H 0
+expect_error "rhcr H < 1" "parameter H must be in \\[1," --map "$m" --planner rhcr --H 0
+expect_error "gd-rhcr k-threshold < 1" "parameter k-threshold must be in \\[1," --map "$m" --planner gd-rhcr --k-threshold 0
+expect_error "gd-rhcr negative c-soft" "parameter c-soft must be in \\[0, 1e\\+09\\], got -0.5" --map "$m" --planner gd-rhcr --c-soft -0.5
+expect_error "gd-rhcr threads 0" "parameter threads must be in \\[1," --map "$m" --planner gd-rhcr --threads 0
+expect_error "rhcr alpha > H" "parameter alpha must be <= H \\(10\\)" --map "$m" --planner rhcr --H 10 --alpha 11
+expect_error "rhcr timeout 0" "parameter timeout must be > 0" --map "$m" --planner rhcr --timeout 0
+expect_error "gd-rhcr timeout < 0" "parameter timeout must be in" --map "$m" --planner gd-rhcr --timeout -3
+expect_error "timeout nan" "parameter timeout must be a finite number" --map "$m" --planner rhcr --timeout nan
+expect_error "gd-rhcr has no alpha" "unknown parameter.*alpha" --map "$m" --planner gd-rhcr --alpha 5
+expect_error "pibt takes no H" "unknown parameter.*H" --map "$m" --planner pibt --H 5
+expect_error "steps 0" "parameter steps must be in \\[1," --map "$m" --steps 0
+expect_error "lookahead 0" "parameter lookahead must be in \\[1," --map "$m" --lookahead 0
+expect_error "negative seed" "parameter seed must be a non-negative integer" --map "$m" --seed -1
+expect_error "agents overflow" "parameter agents must be an integer" --map "$m" --agents 99999999999999999999
+
+# Odd map files: a clear error naming the file and the problem.
+printf 'type octile\nheight 100000\nwidth 100000\nmap\n' >"$tmp/huge.map"
+printf '16777217,1\n1\n1\n1\n' >"$tmp/hugekiva.map"
+: >"$tmp/empty.map"
+printf '\177ELF\002\001\000\377\n' >"$tmp/binary.map"
+printf 'type octile\nheight 2\nwidth 2\nmap\n' >"$tmp/header.map"
+printf '3,2\n1\n1\n1\n..\n..\n' >"$tmp/lies.map"
+printf 'type octile\nheight 1\nwidth 3\nmap\n.\t.\n' >"$tmp/tab.map"
+expect_error "huge map header" "huge.map:4: map of 100000 x 100000 = 10000000000 cells is larger than the limit" --map "$tmp/huge.map"
+expect_error "huge kiva header" "hugekiva.map:1: .*larger than the limit" --map "$tmp/hugekiva.map"
+expect_error "empty map file" "empty.map: empty map file" --map "$tmp/empty.map"
+expect_error "binary map file" "binary.map:1: unrecognised map format.*\\\\x7fELF" --map "$tmp/binary.map"
+expect_error "header-only map" "header.map:5: truncated map: expected 2 rows, found 0" --map "$tmp/header.map"
+expect_error "kiva header lies about rows" "lies.map:7: truncated map: expected 3 rows, found 2" --map "$tmp/lies.map"
+expect_error "tab inside a row" "tab.map:5: unknown map symbol '\\\\x09'" --map "$tmp/tab.map"
+
+# A map in two separate regions (x 0-3 and x 5-8).
+printf 'type octile\nheight 4\nwidth 9\nmap\n....@....\n....@....\n....@....\n....@....\n' >"$tmp/split.map"
+printf '6 0\n' >"$tmp/right_p.txt"
+printf '8 3\n' >"$tmp/right_d.txt"
+printf '0 0\n' >"$tmp/left_p.txt"
+if "$sim" --map "$tmp/split.map" --agents 12 --steps 60 --seed 2 --quiet --out "$tmp/split.json" &&
+   /usr/bin/python3 -c 'import json,sys; r=json.load(open(sys.argv[1])); assert r["goals_reached"] > 0 and r["throughput"] <= r["free_flow_throughput"], r' "$tmp/split.json"; then
+  ok "random tasks on a split map"
+else
+  bad "random tasks on a split map"
+fi
+expect_error "MAPD pickup cannot reach a delivery" "pickup cell \\(0,0\\) cannot reach any delivery cell" \
+  --map "$tmp/split.map" --tasks mapd --pickups "$tmp/left_p.txt" --deliveries "$tmp/right_d.txt"
+expect_error "MAPD start cannot reach a pickup" "agent [0-9]+ at \\([0-3],[0-3]\\) cannot reach any pickup cell" \
+  --map "$tmp/split.map" --tasks mapd --agents 12 --seed 2 --pickups "$tmp/right_p.txt" --deliveries "$tmp/right_d.txt"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]
