@@ -32,7 +32,8 @@ if [ "$ctest_rc" -ne 0 ] || [ "$core_total" -eq 0 ]; then failed+=("core tests")
 total_pass=$((total_pass + core_total - core_failed))
 total_fail=$((total_fail + core_failed))
 
-for extra in scripts/sanitizer_tests.sh scripts/ros_build.sh scripts/ros_test.sh; do
+export FUZZ_SECONDS=${FUZZ_SECONDS:-15}  # scripts/fuzz.sh: a short run per target here
+for extra in scripts/sanitizer_tests.sh scripts/fuzz.sh scripts/ros_build.sh scripts/ros_test.sh; do
   [ -x "$extra" ] || continue
   section "$extra"
   if bash "$extra"; then total_pass=$((total_pass + 1)); else failed+=("$extra"); total_fail=$((total_fail + 1)); fi
