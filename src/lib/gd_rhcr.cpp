@@ -5,6 +5,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
 #include <tbb/task_arena.h>
 
 #include "gdrhcr/pbs.hpp"
@@ -14,6 +15,20 @@
 namespace gdrhcr {
 
 using Clock = std::chrono::steady_clock;
+
+// libtbb is not built with ThreadSanitizer, so TSan cannot see the happens-before edges TBB
+// creates when it hands a task to a worker and joins it. Under TSan we state them ourselves
+// (release before the parallel phase and at the end of each task, acquire at the start of each
+// task and after the join); TBB's own internals are covered by test/tsan.supp (race_top only).
+#if defined(__SANITIZE_THREAD__)
+extern "C" void __tsan_acquire(void* addr);
+extern "C" void __tsan_release(void* addr);
+#define GDRHCR_TSAN_ACQUIRE(p) __tsan_acquire(p)
+#define GDRHCR_TSAN_RELEASE(p) __tsan_release(p)
+#else
+#define GDRHCR_TSAN_ACQUIRE(p) ((void)(p))
+#define GDRHCR_TSAN_RELEASE(p) ((void)(p))
+#endif
 
 const char* to_string(GroupAction a) {
   switch (a) {
@@ -278,12 +293,19 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
     return jobs[a].agents->size() > jobs[b].agents->size();
   });
+  GDRHCR_TSAN_RELEASE(&jobs);
   arena_->arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 1),
                       [&](const tbb::blocked_range<size_t>& r) {
+                        GDRHCR_TSAN_ACQUIRE(&jobs);
                         for (size_t k = r.begin(); k != r.end(); ++k) solve_primary(world, jobs[order[k]]);
-                      });
+                        GDRHCR_TSAN_RELEASE(&jobs);
+                      },
+                      // One group per task: solves differ wildly in cost, so no chunking (and
+                      // no auto_partitioner, whose benign steal flag ThreadSanitizer reports).
+                      tbb::simple_partitioner());
   });
+  GDRHCR_TSAN_ACQUIRE(&jobs);
 
   // Adopt the solved plans; failed solves fall back to the secondary solver.
   double step_max_time = 0;
