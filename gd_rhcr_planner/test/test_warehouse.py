@@ -70,7 +70,9 @@ class Recorder(object):
                     if j is not None and j != i and c != p and cells.get(j) == p:
                         self.violations.append("robots %d and %d swapped %s <-> %s" % (i, j, p, c))
             for r in msg.robots:
-                if r.mode == RobotState.MODE_OFFLINE:
+                # A robot that goes offline mid-move still finishes that move; from its first
+                # report at rest it must never move again.
+                if r.mode == RobotState.MODE_OFFLINE and not r.moving:
                     first = self.offline_cell.setdefault(r.id, (r.x, r.y))
                     if first != (r.x, r.y):
                         self.offline_moves.append((r.id, first, (r.x, r.y)))
