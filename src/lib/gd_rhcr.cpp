@@ -271,7 +271,7 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
 
   last_groups_.assign(groups.size(), GroupInfo{});
   std::vector<Job> jobs;
-  std::vector<int> secondary;  // agents moved by PIBT this step, with why
+  std::vector<int> secondary;  // agents moved by PIBT this step
   std::vector<size_t> threshold_groups;
   for (size_t g = 0; g < groups.size(); ++g) {
     last_groups_[g].agents = groups[g];
