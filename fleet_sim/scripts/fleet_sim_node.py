@@ -6,14 +6,35 @@ free cells (seeded), and executes `step_commands`: each robot moves to its comma
 taking ~move_fraction of the tick period, and switches its reported cell on arrival. Robots
 publish `robot_states` (gd_rhcr_msgs/RobotStateArray) and tf map -> robot_N/base_link with a
 smoothly interpolated pose. Like a real robot's safety stop, a robot never starts a move into a
-cell held by a robot that is not leaving it (counted as `blocked moves` on /diagnostics; zero
-when the planner's commands are followed by everyone).
+cell held by a robot that is not leaving it, or that a robot still moving is entering (counted
+as `blocked moves` on /diagnostics; zero when the planner's commands are followed by everyone).
 
-Fault injection (for tests and demos):
+Fault injection (for tests, demos and soak runs); times in seconds after the first step
+command; robot ids < 0 (the defaults) disable a fault:
   ~delay_robot N, ~delay_start S, ~delay_duration D: robot N ignores commands (stalls) for D s
-      from S s after the first command.
+      from S s.
   ~stop_robot N, ~stop_at S, ~stop_duration D: robot N goes offline (mode OFFLINE, does not
-      move) at S s after the first command, for D s (D < 0: for good).
+      move; a move under way is finished) at S s, for D s (D < 0: for good).
+  ~stop_mid_task (bool, default false): the stop fires at the first moment >= S at which robot N
+      carries a task (the task_id of its last command >= 0) instead of exactly at S, and lasts
+      D s from then. Diagnostics: "stops fired", "stop fired at" (s after the first command),
+      "stopped robot", "stopped robot task" (the task it held), "stops missed".
+  ~silent_robot N, ~silent_at S, ~silent_duration D (D < 0: for good): robot N dies: from the
+      first moment >= S at which it is at rest and was last reported at rest (so its last report
+      is where it is), it is left out of robot_states and tf, ignores commands and does not move,
+      for D s. Then it reports again at its cell, with the mode and task of the last command it
+      took before it died. Diagnostics: "silences", "silent robot", "silent at", "silent now".
+  ~slip_robot N, ~slip_at S, ~slip_count K (default 1): from S s, the next K moves robot N
+      starts end in another cell than commanded: a free 4-neighbour of its source cell that no
+      robot occupies, is commanded into or is entering (first the two perpendicular to the
+      commanded direction, then the reverse), or, if there is none, its source cell (it fails to
+      move). Never a jump or a collision. Diagnostics: "slips", "slips that stayed".
+  ~fault_period P (default 0 = each fault once): when > 0, every fault above repeats every P s
+      (occurrence k at S + k*P) on robot (N + k*~fault_stride) % num_robots (~fault_stride
+      default 7), so the faults visit different robots; durations must then be >= 0. Choose
+      base robots that differ by neither 0 nor +-stride so two faults never share a robot.
+      A stop_mid_task or silent occurrence whose moment did not come before the next one fell
+      due is skipped ("stops missed", "silences missed").
 """
 import math
 import random
@@ -27,6 +48,7 @@ from geometry_msgs.msg import Pose, TransformStamped
 from nav_msgs.msg import OccupancyGrid
 
 from gd_rhcr_msgs.msg import RobotState, RobotStateArray, StepCommandArray
+from fleet_sim.faults import FaultSchedule, slip_target
 from fleet_sim.grid_frame import GridFrame, adjacent_or_same, resolve_moves
 
 
@@ -46,6 +68,7 @@ class Robot(object):
         self.yaw = 0.0
         self.mode = RobotState.MODE_IDLE
         self.task_id = -1
+        self.reported = None  # (cell, moving) of the last published state
 
 
 class FleetSim(object):
@@ -56,12 +79,6 @@ class FleetSim(object):
         self.rate = rospy.get_param("~publish_rate", 20.0)
         self.tf_enabled = rospy.get_param("~publish_tf", True)
         self.frame = rospy.get_param("~frame_id", "map")
-        self.delay_robot = rospy.get_param("~delay_robot", -1)
-        self.delay_start = rospy.get_param("~delay_start", 5.0)
-        self.delay_duration = rospy.get_param("~delay_duration", 3.0)
-        self.stop_robot = rospy.get_param("~stop_robot", -1)
-        self.stop_at = rospy.get_param("~stop_at", 5.0)
-        self.stop_duration = rospy.get_param("~stop_duration", -1.0)
         self.lock = threading.Lock()
         self.grid = None
         self.robots = []
@@ -70,6 +87,9 @@ class FleetSim(object):
         self.invalid_commands = 0
         self.commands_received = 0
         self.last_tick = 0
+        self.slips = 0
+        self.slips_stayed = 0
+        self.load_faults()
 
         rospy.loginfo("fleet_sim: waiting for the latched map")
         msg = rospy.wait_for_message("map", OccupancyGrid)
@@ -97,19 +117,71 @@ class FleetSim(object):
         rospy.Timer(rospy.Duration(1.0), self.on_diagnostics)
 
     # --- faults -----------------------------------------------------------------------------
+    def load_faults(self):
+        period = float(rospy.get_param("~fault_period", 0.0))
+        stride = int(rospy.get_param("~fault_stride", 7))
+        self.fault_period = period
+
+        def schedule(name, robot_param, start_param, start_default, duration_param, duration_default,
+                     count=0, ready=None):
+            robot = int(rospy.get_param(robot_param, -1))
+            start = float(rospy.get_param(start_param, start_default))
+            duration = float(rospy.get_param(duration_param, duration_default)) if duration_param else -1.0
+            if robot >= self.n:
+                rospy.logfatal("fleet_sim: %s %d is not a robot (0..%d)", robot_param, robot, self.n - 1)
+                sys.exit(1)
+            if robot >= 0 and period > 0 and duration_param and duration < 0:
+                rospy.logfatal("fleet_sim: with ~fault_period > 0, %s must be >= 0 (a fault for good "
+                               "would repeat until no robot is left)", duration_param)
+                sys.exit(1)
+            if robot >= 0:
+                rospy.loginfo("fleet_sim: fault %s on robot %d at %.1f s%s%s", name, robot, start,
+                              " for %.1f s" % duration if duration >= 0 and duration_param else "",
+                              ", every %.1f s on robot +%d" % (period, stride) if period > 0 else "")
+            return FaultSchedule(name, robot, start, duration, self.n, period=period, stride=stride,
+                                 count=count, ready=ready)
+
+        self.stop_mid_task = bool(rospy.get_param("~stop_mid_task", False))
+        self.delay = schedule("delay", "~delay_robot", "~delay_start", 5.0, "~delay_duration", 3.0)
+        self.stop = schedule("stop", "~stop_robot", "~stop_at", 5.0, "~stop_duration", -1.0,
+                             ready=self.carries_task if self.stop_mid_task else None)
+        self.silent = schedule("silent", "~silent_robot", "~silent_at", 10.0, "~silent_duration", -1.0,
+                               ready=self.at_rest_and_reported)
+        slip_count = int(rospy.get_param("~slip_count", 1))
+        self.slip = schedule("slip", "~slip_robot", "~slip_at", 10.0, None, None,
+                             count=max(1, slip_count))
+
+    # Readiness conditions (with self.lock held). None = not yet.
+    def carries_task(self, rid):
+        r = self.robots[rid]
+        return r.task_id if r.task_id >= 0 else None
+
+    def at_rest_and_reported(self, rid):
+        r = self.robots[rid]
+        return True if (not r.moving and r.reported == (r.cell, False)) else None
+
     def elapsed(self, now):
         return None if self.first_command is None else now - self.first_command
 
-    def stalled(self, rid, now):
+    def update_faults(self, now):
         e = self.elapsed(now)
-        return (rid == self.delay_robot and e is not None and
-                self.delay_start <= e < self.delay_start + self.delay_duration)
+        for f in (self.delay, self.stop, self.silent, self.slip):
+            for ep in f.update(e):
+                if f is self.stop and self.stop_mid_task:
+                    rospy.logwarn("fleet_sim: robot %d goes offline at %.2f s holding task %d",
+                                  ep.robot, ep.start, ep.info)
+                else:
+                    rospy.logwarn("fleet_sim: fault %s on robot %d at %.2f s", f.name, ep.robot, ep.start)
+        return e
+
+    def stalled(self, rid, now):
+        return self.delay.active(rid, self.elapsed(now))
 
     def offline(self, rid, now):
-        e = self.elapsed(now)
-        if rid != self.stop_robot or e is None or e < self.stop_at:
-            return False
-        return self.stop_duration < 0 or e < self.stop_at + self.stop_duration
+        return self.stop.active(rid, self.elapsed(now))
+
+    def dead(self, rid, now):
+        return self.silent.active(rid, self.elapsed(now))
 
     # --- motion -----------------------------------------------------------------------------
     def advance(self, now):
@@ -127,6 +199,7 @@ class FleetSim(object):
             self.commands_received += 1
             self.last_tick = msg.tick
             self.advance(now)
+            e = self.update_faults(now)
             cells = [r.cell for r in self.robots]
             targets = list(cells)
             frozen = [False] * self.n
@@ -135,6 +208,8 @@ class FleetSim(object):
                     self.invalid_commands += 1
                     continue
                 r = self.robots[c.robot_id]
+                if self.dead(r.id, now):
+                    continue  # a dead robot hears nothing
                 target = (c.next_x, c.next_y)
                 if not self.offline(r.id, now):
                     r.mode = c.mode
@@ -146,8 +221,28 @@ class FleetSim(object):
                     continue
                 targets[r.id] = target
             for r in self.robots:
-                frozen[r.id] = r.moving or self.stalled(r.id, now) or self.offline(r.id, now)
-            moves, blocked = resolve_moves(cells, targets, frozen)
+                frozen[r.id] = (r.moving or self.stalled(r.id, now) or self.offline(r.id, now) or
+                                self.dead(r.id, now))
+            # A robot still moving (a late or early tick) holds the cell it enters as well.
+            entering = [r.dst for r in self.robots if r.moving]
+            moves, blocked = resolve_moves(cells, targets, frozen, entering)
+            if self.slip.episodes:
+                slipped = False
+                for i in sorted(moves):
+                    ep = self.slip.pending_slip(i, e)
+                    if ep is None:
+                        continue
+                    claimed = set(cells) | set(targets) | set(entering)
+                    alt = slip_target(cells[i], targets[i], self.grid.is_free, claimed)
+                    rospy.logwarn("fleet_sim: robot %d slips: commanded %s -> %s, goes to %s", i, cells[i],
+                                  targets[i], alt if alt else "nowhere (stays)")
+                    targets[i] = alt if alt else cells[i]
+                    ep.left -= 1
+                    self.slips += 1
+                    self.slips_stayed += alt is None
+                    slipped = True
+                if slipped:  # a robot that stays now blocks the robots that were to follow it
+                    moves, blocked = resolve_moves(cells, targets, frozen, entering)
             self.blocked_moves += len(blocked)
             duration = max(0.01, self.move_fraction * msg.tick_period)
             for i in moves:
@@ -174,7 +269,10 @@ class FleetSim(object):
         transforms = []
         with self.lock:
             self.advance(now)
+            self.update_faults(now)
             for r in self.robots:
+                if self.dead(r.id, now):
+                    continue
                 s = RobotState()
                 s.id = r.id
                 s.x, s.y = r.cell
@@ -186,6 +284,7 @@ class FleetSim(object):
                 s.mode = RobotState.MODE_OFFLINE if self.offline(r.id, now) else r.mode
                 s.task_id = r.task_id
                 s.moving = r.moving
+                r.reported = (r.cell, r.moving)
                 arr.robots.append(s)
                 if self.tf_pub:
                     t = TransformStamped()
@@ -201,15 +300,42 @@ class FleetSim(object):
             self.tf_pub.sendTransform(transforms)
 
     def on_diagnostics(self, _event):
+        now = rospy.get_time()
         with self.lock:
+            e = self.elapsed(now)
             st = DiagnosticStatus()
             st.name = rospy.get_name() + ": fleet"
             st.hardware_id = "fleet_sim"
             st.level = DiagnosticStatus.OK if self.blocked_moves == 0 else DiagnosticStatus.WARN
             st.message = "%d robots" % self.n
-            for k, v in (("robots", self.n), ("commands received", self.commands_received),
-                         ("last tick", self.last_tick), ("blocked moves", self.blocked_moves),
-                         ("invalid commands", self.invalid_commands)):
+            values = [("robots", self.n), ("commands received", self.commands_received),
+                      ("last tick", self.last_tick), ("blocked moves", self.blocked_moves),
+                      ("invalid commands", self.invalid_commands)]
+            if self.fault_period > 0:
+                values.append(("fault period", self.fault_period))
+            if self.delay.enabled:
+                values += [("delays", self.delay.fired),
+                           ("delayed robot", self.delay.last.robot if self.delay.last else -1)]
+            if self.stop.enabled:
+                last = self.stop.last
+                values += [("stops fired", self.stop.fired), ("stops missed", self.stop.missed),
+                           ("stopped robot", last.robot if last else -1),
+                           ("stop fired at", "%.3f" % last.start if last else "")]
+                if self.stop_mid_task:
+                    values.append(("stopped robot task", last.info if last else -1))
+                values.append(("offline now", " ".join(str(ep.robot) for ep in self.stop.episodes
+                                                       if ep.active(e))))
+            if self.silent.enabled:
+                last = self.silent.last
+                values += [("silences", self.silent.fired), ("silences missed", self.silent.missed),
+                           ("silent robot", last.robot if last else -1),
+                           ("silent at", "%.3f" % last.start if last else ""),
+                           ("silent now", " ".join(str(ep.robot) for ep in self.silent.episodes
+                                                   if ep.active(e)))]
+            if self.slip.enabled:
+                values += [("slips", self.slips), ("slips that stayed", self.slips_stayed),
+                           ("slip robot", self.slip.last.robot if self.slip.last else -1)]
+            for k, v in values:
                 st.values.append(KeyValue(key=k, value=str(v)))
         arr = DiagnosticArray()
         arr.header.stamp = rospy.Time.now()

@@ -42,14 +42,17 @@ def adjacent_or_same(a, b):
     return abs(a[0] - b[0]) + abs(a[1] - b[1]) <= 1
 
 
-def resolve_moves(cells, targets, frozen):
+def resolve_moves(cells, targets, frozen, reserved=()):
     """Which commanded moves may start now without two robots ever sharing a cell.
 
     cells[i]: robot i's cell; targets[i]: its commanded cell (adjacent or equal); frozen[i]:
-    True for a robot that will not move (stalled, offline, still moving). A move starts unless
-    its target is held by a robot that stays (directly or behind a chain of blocked robots),
-    or is a swap. Returns (moves: set of robot ids that start, blocked: ids whose move waits).
+    True for a robot that will not move (stalled, offline, still moving); reserved: cells that
+    robots still moving are entering (their cell in `cells` is the one they leave). A move starts
+    unless its target is held by a robot that stays (directly or behind a chain of blocked
+    robots), is reserved, or is a swap. Returns (moves: set of robot ids that start, blocked:
+    ids whose move waits).
     """
+    reserved = set(reserved)
     n = len(cells)
     movers = set(i for i in range(n) if not frozen[i] and targets[i] != cells[i])
     at = {c: i for i, c in enumerate(cells)}
@@ -61,7 +64,7 @@ def resolve_moves(cells, targets, frozen):
             j = at.get(targets[i])
             stays = j is not None and (j not in movers)
             swap = j is not None and j in movers and targets[j] == cells[i]
-            if stays or swap:
+            if stays or swap or targets[i] in reserved:
                 movers.discard(i)
                 blocked.add(i)
                 changed = True
