@@ -89,7 +89,8 @@ bool Fleet::cancel(uint64_t id, std::string& reason) {
   return true;
 }
 
-bool Fleet::update_robot(int64_t id, int x, int y, bool offline, bool moving, std::string& error) {
+bool Fleet::update_robot(int64_t id, int x, int y, bool offline, bool moving, std::string& error,
+                         double now) {
   if (id < 0 || id >= num_robots()) {
     error = "unknown robot id " + std::to_string(id) + " (fleet has " + std::to_string(num_robots()) + " robots)";
     return false;
@@ -102,9 +103,30 @@ bool Fleet::update_robot(int64_t id, int x, int y, bool offline, bool moving, st
   RobotRecord& r = robots_[id];
   r.reported = true;
   r.cell = c;
+  r.reported_offline = offline;
+  r.silent = false;
   r.offline = offline;
   r.moving = moving;
+  r.last_report = now;
   return true;
+}
+
+std::vector<int> Fleet::mark_silent(double now, double timeout) {
+  std::vector<int> fresh;
+  for (int i = 0; i < num_robots(); ++i) {
+    RobotRecord& r = robots_[i];
+    if (!r.reported || r.silent || now - r.last_report <= timeout) continue;
+    r.silent = true;
+    r.offline = true;
+    fresh.push_back(i);
+  }
+  return fresh;
+}
+
+int Fleet::offline_count() const {
+  int n = 0;
+  for (auto& r : robots_) n += r.offline;
+  return n;
 }
 
 bool Fleet::all_reported() const { return missing_robots() == 0; }
@@ -159,11 +181,10 @@ void Fleet::advance() {
     TaskRecord& t = it->second;
     if (rob.offline) {
       rob.task = -1;
-      if (t.state == kAssigned) {
-        set_state(t, kQueued, -1, "robot " + std::to_string(r) + " went offline; requeued");
-      } else {
-        set_state(t, kFailed, r, "robot " + std::to_string(r) + " went offline while carrying the load");
-      }
+      const std::string why = rob.silent ? " stopped reporting" : " went offline";
+      set_state(t, kQueued, -1,
+                "robot " + std::to_string(r) + why +
+                    (t.state == kPicked ? " carrying the load; requeued from the pickup" : "; requeued"));
       continue;
     }
     if (t.state == kAssigned && rob.cell == t.pickup) set_state(t, kPicked, r, "");
@@ -252,6 +273,52 @@ int Fleet::distance_left(uint64_t id) const {
   return dist_.get(t->delivery, at);
 }
 
+std::vector<TaskRecord> Fleet::open_tasks() const {
+  std::vector<TaskRecord> out;
+  for (auto& [id, t] : tasks_)
+    if (!task_finished(t.state)) out.push_back(t);
+  return out;
+}
+
+size_t Fleet::restore(const std::vector<TaskRecord>& open, uint64_t delivered, uint64_t failed,
+                      uint64_t next_id) {
+  delivered_ = delivered;
+  failed_ = failed;
+  next_id_ = std::max(next_id_, next_id);
+  size_t restored = 0;
+  for (const TaskRecord& saved : open) {
+    if (saved.id == 0 || tasks_.count(saved.id)) continue;  // duplicate in a damaged store
+    TaskRecord t;
+    t.id = saved.id;
+    t.pickup_x = saved.pickup_x, t.pickup_y = saved.pickup_y;
+    t.delivery_x = saved.delivery_x, t.delivery_y = saved.delivery_y;
+    t.priority = saved.priority;
+    next_id_ = std::max(next_id_, t.id + 1);
+    std::string reason;
+    const bool ok = validate_cell(t.pickup_x, t.pickup_y, "pickup", t.pickup, reason) &&
+                    validate_cell(t.delivery_x, t.delivery_y, "delivery", t.delivery, reason) &&
+                    t.pickup != t.delivery && dist_.get(t.delivery, t.pickup) < gdrhcr::kUnreachable;
+    tasks_[t.id] = t;
+    TaskRecord& rec = tasks_[t.id];
+    if (!ok) {
+      set_state(rec, kFailed, -1, "restored task no longer valid on this map: " +
+                                      (reason.empty() ? std::string("delivery unreachable") : reason));
+      continue;
+    }
+    ++restored;
+    const int r = saved.robot;
+    const bool keeps_robot = (saved.state == kAssigned || saved.state == kPicked) && r >= 0 &&
+                             r < num_robots() && robots_[r].task < 0;
+    if (keeps_robot) {
+      robots_[r].task = static_cast<int64_t>(t.id);
+      set_state(rec, saved.state, r, "restored");
+    } else {
+      set_state(rec, kQueued, -1, "restored");
+    }
+  }
+  return restored;
+}
+
 size_t Fleet::count_in_state(uint8_t s) const {
   size_t n = 0;
   for (auto& [id, t] : tasks_) n += t.state == s;
@@ -259,11 +326,15 @@ size_t Fleet::count_in_state(uint8_t s) const {
 }
 
 int hold_cascade(const gdrhcr::Grid& grid, const std::vector<Cell>& pos, std::vector<Cell>& next,
-                 std::vector<uint8_t>& held) {
+                 std::vector<uint8_t>& held, const std::vector<Cell>& blocked) {
   const int n = static_cast<int>(pos.size());
   std::map<Cell, int> entering;  // cell -> robot planned to move into it
   for (int i = 0; i < n; ++i)
     if (next[i] != pos[i]) entering[next[i]] = i;
+  for (Cell c : blocked) {
+    auto it = entering.find(c);
+    if (it != entering.end()) held[it->second] = 1;
+  }
   std::vector<int> stack;
   for (int i = 0; i < n; ++i)
     if (held[i]) {

@@ -33,16 +33,16 @@
 #include <gd_rhcr_msgs/Task.h>
 #include <gd_rhcr_msgs/TaskStatus.h>
 
+#include <cstdlib>
+
+#include "gd_rhcr_planner/deadline_planner.hpp"
 #include "gd_rhcr_planner/fleet.hpp"
 #include "gd_rhcr_planner/map_loader.hpp"
+#include "gd_rhcr_planner/task_store.hpp"
 #include "gdrhcr/dist_table.hpp"
 #include "gdrhcr/planner.hpp"
 #include "gdrhcr/task_stream.hpp"
 #include "gdrhcr/validator.hpp"
-#if __has_include("gdrhcr/gd_rhcr.hpp")
-#include "gdrhcr/gd_rhcr.hpp"
-#define GD_RHCR_PLANNER_HAS_GROUPS 1
-#endif
 
 namespace gd_rhcr_planner {
 namespace {
@@ -116,14 +116,17 @@ class PlannerNode {
   void publish_events_locked();
   void publish_markers_locked(const std::vector<Cell>& pos, const std::vector<Cell>& next,
                               const std::vector<std::vector<Cell>>& goals,
-                              const std::vector<int>& group_of);
+                              const std::vector<int>& group_of,
+                              const std::vector<std::vector<Cell>>& planned_paths);
   geometry_msgs::Pose pose_of(Cell c) const;
   geometry_msgs::Point point_of(Cell c, double z) const;
 
+  std::string default_task_store() const;
+
   ros::NodeHandle nh_, pnh_;
   // Parameters.
-  std::string map_path_, planner_name_, frame_id_;
-  double cell_size_ = 1.0, tick_rate_ = 2.0;
+  std::string map_path_, planner_name_, frame_id_, task_store_path_;
+  double cell_size_ = 1.0, tick_rate_ = 2.0, plan_deadline_ = 0, offline_timeout_ = 2.0;
   int num_robots_ = 0, label_limit_ = 60, dist_budget_mb_ = 256;
   uint64_t seed_ = 1;
   bool per_robot_topics_ = false, publish_markers_ = true;
@@ -132,14 +135,17 @@ class PlannerNode {
   // The core.
   std::unique_ptr<LoadedMap> map_;
   std::unique_ptr<gdrhcr::DistTable> dist_;
-  std::unique_ptr<gdrhcr::Planner> planner_;
+  std::unique_ptr<DeadlinePlanner> planner_;
   std::unique_ptr<gdrhcr::StepValidator> validator_;
   std::unique_ptr<Fleet> fleet_;
+  std::unique_ptr<TaskStore> store_;  // null when persistence is off
   gdrhcr::MapdCells mapd_;
 
   std::mutex mutex_;  // guards fleet_, goal handles, counters below
   std::map<uint64_t, DeliveryServer::GoalHandle> goal_of_task_;
   uint64_t tick_ = 0, overruns_ = 0, skipped_ = 0, invalid_plans_ = 0, bad_reports_ = 0;
+  uint64_t fallback_ticks_ = 0, late_ticks_ = 0, planner_errors_ = 0, store_errors_ = 0;
+  std::vector<Cell> last_next_;  // the last commanded cells (a silent robot may be moving there)
   std::deque<double> tick_stamps_;  // wall times of recent published ticks, for the rate
   double plan_time_sum_ = 0, plan_time_max_ = 0, step_time_max_ = 0;
   int plan_time_count_ = 0;
@@ -169,31 +175,46 @@ void PlannerNode::load_parameters() {
   pnh_.param("publish_markers", publish_markers_, true);
   pnh_.param("label_limit", label_limit_, 60);
   pnh_.param("dist_budget_mb", dist_budget_mb_, 256);
+  pnh_.param("plan_deadline", plan_deadline_, 0.0);
+  pnh_.param("offline_timeout", offline_timeout_, 2.0);
+  if (!pnh_.getParam("task_store", task_store_path_) || task_store_path_ == "default")
+    task_store_path_ = default_task_store();
+  if (task_store_path_ == "none") task_store_path_.clear();
   if (!(tick_rate_ > 0 && tick_rate_ <= 1000)) throw gdrhcr::ParamError("~tick_rate must be in (0, 1000] Hz");
+  if (plan_deadline_ == 0) plan_deadline_ = 0.7 / tick_rate_;
+  if (!(plan_deadline_ > 0 && plan_deadline_ <= 1.0 / tick_rate_))
+    throw gdrhcr::ParamError("~plan_deadline must be in (0, 1/tick_rate] seconds (0 = 0.7/tick_rate)");
+  if (!(offline_timeout_ > 0)) throw gdrhcr::ParamError("~offline_timeout must be > 0 seconds");
   if (num_robots_ < 1) throw gdrhcr::ParamError("~num_robots must be >= 1");
   if (!(cell_size_ > 0)) throw gdrhcr::ParamError("~cell_size must be > 0 metres");
   if (dist_budget_mb_ < 1) throw gdrhcr::ParamError("~dist_budget_mb must be >= 1");
 
-  // Planner parameters under their ROS names (ROS names cannot hold '-'), then ~planner_params
-  // verbatim with '_' read as '-'. K_threshold <= 0 means the planner's default.
-  const std::vector<std::pair<std::string, std::string>> named = {
-      {"V", "V"}, {"H", "H"}, {"c_soft", "c-soft"}, {"K_threshold", "k-threshold"},
-      {"alpha", "alpha"}, {"timeout", "timeout"}, {"threads", "threads"}, {"node_budget", "node-budget"}};
-  for (auto& [ros_name, core_name] : named) {
+  // Planner parameters under their ROS names (the core reads c_soft as c-soft, K_threshold as
+  // k-threshold), then anything in ~planner_params. K_threshold 0 means the planner's default.
+  for (const char* name : {"V", "H", "c_soft", "K_threshold", "alpha", "timeout", "threads", "node_budget"}) {
     XmlRpc::XmlRpcValue v;
-    if (!pnh_.getParam(ros_name, v)) continue;
-    if (ros_name == "K_threshold" && v.getType() == XmlRpc::XmlRpcValue::TypeInt && static_cast<int>(v) <= 0)
+    if (!pnh_.getParam(name, v)) continue;
+    if (std::string(name) == "K_threshold" && v.getType() == XmlRpc::XmlRpcValue::TypeInt && static_cast<int>(v) == 0)
       continue;
-    planner_params_.set(core_name, xmlrpc_to_string(v));
+    planner_params_.set(name, xmlrpc_to_string(v));
   }
   XmlRpc::XmlRpcValue extra;
   if (pnh_.getParam("planner_params", extra) && extra.getType() == XmlRpc::XmlRpcValue::TypeStruct) {
-    for (auto it = extra.begin(); it != extra.end(); ++it) {
-      std::string key = it->first;
-      std::replace(key.begin(), key.end(), '_', '-');
-      planner_params_.set(key, xmlrpc_to_string(it->second));
-    }
+    for (auto it = extra.begin(); it != extra.end(); ++it) planner_params_.set(it->first, xmlrpc_to_string(it->second));
   }
+}
+
+// $ROS_HOME (else ~/.ros)/gd_rhcr_planner/<node name>.tasks.jsonl: one store per planner node,
+// so planners in different namespaces keep their own queues.
+std::string PlannerNode::default_task_store() const {
+  std::string home;
+  if (const char* h = std::getenv("ROS_HOME")) home = h;
+  else if (const char* u = std::getenv("HOME")) home = std::string(u) + "/.ros";
+  else home = "/tmp";
+  std::string name = ros::this_node::getName();
+  std::replace(name.begin(), name.end(), '/', '_');
+  if (!name.empty() && name[0] == '_') name.erase(0, 1);
+  return home + "/gd_rhcr_planner/" + name + ".tasks.jsonl";
 }
 
 void PlannerNode::init() {
@@ -203,7 +224,10 @@ void PlannerNode::init() {
   if (static_cast<size_t>(num_robots_) > grid.free_cells().size())
     throw gdrhcr::ParamError("~num_robots exceeds the free cells of the map");
   dist_ = std::make_unique<gdrhcr::DistTable>(grid, size_t(dist_budget_mb_) << 20);
-  planner_ = gdrhcr::make_planner(planner_name_, planner_params_, grid, num_robots_, seed_);
+  gdrhcr::Params no_params;
+  planner_ = std::make_unique<DeadlinePlanner>(
+      gdrhcr::make_planner(planner_name_, planner_params_, grid, num_robots_, seed_),
+      gdrhcr::make_planner("pibt", no_params, grid, num_robots_, seed_));
   const auto unused = planner_params_.unused();
   if (!unused.empty()) {
     std::string s;
@@ -212,6 +236,16 @@ void PlannerNode::init() {
   }
   validator_ = std::make_unique<gdrhcr::StepValidator>(grid);
   fleet_ = std::make_unique<Fleet>(grid, *dist_, num_robots_);
+  if (!task_store_path_.empty()) {
+    store_ = std::make_unique<TaskStore>(task_store_path_);  // throws on a damaged store
+    const auto& saved = store_->loaded();
+    for (auto& w : saved.warnings) ROS_WARN("%s", w.c_str());
+    const size_t n = fleet_->restore(saved.open, saved.delivered, saved.failed, saved.next_id);
+    ROS_INFO("task store %s: %zu open tasks restored (%zu in the store)", task_store_path_.c_str(), n,
+             saved.open.size());
+  } else {
+    ROS_INFO("task store off (~task_store: none): tasks do not survive a restart");
+  }
   mapd_ = map_->format == "map_server" ? gdrhcr::default_mapd_cells(grid)
                                        : gdrhcr::mapd_cells_for_map(grid, map_path_);
   ROS_INFO("map %s (%s, %dx%d, %zu free cells, %.3f m/cell); planner %s; %d robots; tick %.2f Hz; "
@@ -295,10 +329,11 @@ void PlannerNode::publish_static() {
 }
 
 void PlannerNode::on_states(const gd_rhcr_msgs::RobotStateArray::ConstPtr& msg) {
+  const double now = ros::Time::now().toSec();
   std::lock_guard<std::mutex> lock(mutex_);
   for (auto& s : msg->robots) {
     std::string error;
-    if (!fleet_->update_robot(s.id, s.x, s.y, s.mode == kOffline, s.moving, error)) {
+    if (!fleet_->update_robot(s.id, s.x, s.y, s.mode == kOffline, s.moving, error, now)) {
       ++bad_reports_;
       ROS_WARN_THROTTLE(2.0, "ignoring robot state: %s", error.c_str());
     }
@@ -384,7 +419,17 @@ void PlannerNode::on_cancel_goal(DeliveryServer::GoalHandle gh) {
 
 void PlannerNode::publish_events_locked() {
   const ros::Time now = ros::Time::now();
-  for (auto& e : fleet_->take_events()) {
+  const auto events = fleet_->take_events();
+  if (store_ && !events.empty()) {
+    try {  // before anyone hears of the change, so an accepted task is on disk when accepted
+      store_->record(events, *fleet_);
+    } catch (const std::exception& e) {
+      ++store_errors_;
+      last_problem_ = e.what();
+      ROS_ERROR_THROTTLE(2.0, "%s; tasks are kept in memory but will not survive a restart", e.what());
+    }
+  }
+  for (auto& e : events) {
     gd_rhcr_msgs::TaskStatus st;
     st.header.stamp = now;
     st.task_id = e.task_id;
@@ -422,13 +467,16 @@ void PlannerNode::publish_events_locked() {
 void PlannerNode::on_tick(const ros::TimerEvent& ev) {
   const auto wall0 = std::chrono::steady_clock::now();
   const double period = 1.0 / tick_rate_;
-  std::vector<Cell> pos, next;
+  std::vector<Cell> pos, next, blocked;
   std::vector<std::vector<Cell>> goals;
   std::vector<uint8_t> held;
   uint64_t tick;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     tick = ++tick_;
+    for (int r : fleet_->mark_silent(ros::Time::now().toSec(), offline_timeout_))
+      ROS_WARN("robot %d sent no state for %.1f s: offline (an obstacle at its last cell); its task is requeued",
+               r, offline_timeout_);
     if (!fleet_->all_reported()) {
       ++skipped_;
       last_problem_ = std::to_string(fleet_->missing_robots()) + " robots have not reported a state yet";
@@ -450,34 +498,35 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     for (int r = 0; r < fleet_->num_robots(); ++r) {
       const auto& rob = fleet_->robot(r);
       held[r] = rob.offline || rob.moving;
+      // A silent robot may be on its way into the cell last commanded: nobody else enters it.
+      if (rob.silent && r < static_cast<int>(last_next_.size()) && last_next_[r] != rob.cell)
+        blocked.push_back(last_next_[r]);
     }
   }
 
   // Plan outside the lock, so services and state updates keep flowing.
   const auto& grid = map_->grid;
   gdrhcr::WorldView world{grid, *dist_, static_cast<int>(tick), pos, goals};
-  gdrhcr::StepReport report;
   next = pos;
   std::string plan_error;
-  try {
-    report = planner_->plan_step(world, next);
-  } catch (const std::exception& e) {
-    plan_error = e.what();
-    next = pos;
-  }
-  const int held_count = hold_cascade(grid, pos, next, held);
+  // The planner gets plan_deadline; past it (or if it throws) PIBT moves the fleet this tick.
+  const DeadlineOutcome outcome = planner_->step(world, next, plan_deadline_);
+  const gdrhcr::StepReport& report = outcome.report;
+  const int held_count = hold_cascade(grid, pos, next, held, blocked);
   auto violation = validator_->check(pos, next);
   if (violation) {  // never publish a colliding step: everybody waits instead
     plan_error = violation->describe(grid, static_cast<int>(tick));
     next = pos;
   }
 
+  // The primary planner's groups and paths, when it planned this tick (else it may still be
+  // running an abandoned step on its worker and must not be read).
+  const gdrhcr::Planner* primary = outcome.fallback ? nullptr : &planner_->primary();
   std::vector<int> group_of(pos.size());
   std::iota(group_of.begin(), group_of.end(), 0);
   gd_rhcr_msgs::GroupArray groups_msg;
-#ifdef GD_RHCR_PLANNER_HAS_GROUPS
-  if (auto* gd = dynamic_cast<gdrhcr::GdRhcrPlanner*>(planner_.get())) {
-    const auto& groups = gd->last_groups();
+  if (primary) {
+    const auto groups = primary->groups();
     for (size_t g = 0; g < groups.size(); ++g) {
       gd_rhcr_msgs::Group gm;
       for (int a : groups[g].agents) {
@@ -485,11 +534,15 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
         if (a >= 0 && a < static_cast<int>(group_of.size())) group_of[a] = static_cast<int>(g);
       }
       gm.size = gm.members.size();
-      gm.solver = gdrhcr::to_string(groups[g].action);
+      gm.solver = groups[g].solver;
       groups_msg.groups.push_back(gm);
     }
   }
-#endif
+  std::vector<std::vector<Cell>> planned;
+  if (primary && publish_markers_) {
+    planned.resize(pos.size());
+    for (size_t r = 0; r < pos.size(); ++r) planned[r] = primary->planned_path(static_cast<int>(r));
+  }
 
   gd_rhcr_msgs::StepCommandArray cmds;
   cmds.header.stamp = ev.current_real.isZero() ? ros::Time::now() : ev.current_real;
@@ -497,6 +550,20 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
   cmds.tick = tick;
   cmds.tick_period = period;
   std::lock_guard<std::mutex> lock(mutex_);
+  last_next_ = next;
+  if (outcome.fallback) {
+    ++fallback_ticks_;
+    if (outcome.primary_late) {
+      ++late_ticks_;
+      ROS_WARN_THROTTLE(2.0, "tick %lu: %s missed the %.3f s plan deadline; PIBT moved the fleet",
+                        (unsigned long)tick, planner_name_.c_str(), plan_deadline_);
+    }
+    if (!outcome.primary_error.empty()) {
+      ++planner_errors_;
+      last_problem_ = "planner failed, PIBT moved the fleet: " + outcome.primary_error;
+      ROS_ERROR_THROTTLE(1.0, "%s", last_problem_.c_str());
+    }
+  }
   if (!plan_error.empty()) {
     ++invalid_plans_;
     last_problem_ = "planner step rejected, all robots wait: " + plan_error;
@@ -532,7 +599,7 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
   gd_rhcr_msgs::PlannerStats st;
   st.header.stamp = cmds.header.stamp;
   st.tick = tick;
-  st.planner = planner_->name();
+  st.planner = planner_->primary().name();
   st.num_robots = pos.size();
   st.planned = report.planned;
   st.plan_time = report.plan_time_s;
@@ -546,9 +613,14 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
   st.tasks_delivered = fleet_->delivered_total();
   st.tasks_failed = fleet_->failed_total();
   st.num_groups = groups_msg.groups.size();
-  try {
-    st.planner_stats_json = planner_->stats().dump();
-  } catch (const std::exception&) {
+  st.fallback_ticks = fallback_ticks_;
+  st.fallback = outcome.fallback;
+  st.offline_robots = fleet_->offline_count();
+  if (primary) {
+    try {
+      st.planner_stats_json = primary->stats().dump();
+    } catch (const std::exception&) {
+    }
   }
   stats_pub_.publish(st);
   if (!groups_msg.groups.empty()) {
@@ -556,12 +628,13 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     groups_msg.tick = tick;
     groups_pub_.publish(groups_msg);
   }
-  if (publish_markers_) publish_markers_locked(pos, next, goals, group_of);
+  if (publish_markers_) publish_markers_locked(pos, next, goals, group_of, planned);
 }
 
 void PlannerNode::publish_markers_locked(const std::vector<Cell>& pos, const std::vector<Cell>& next,
                                          const std::vector<std::vector<Cell>>& goals,
-                                         const std::vector<int>& group_of) {
+                                         const std::vector<int>& group_of,
+                                         const std::vector<std::vector<Cell>>& planned_paths) {
   const double res = map_->frame.resolution;
   visualization_msgs::MarkerArray arr;
   auto base = [&](const std::string& ns, int type) {
@@ -611,12 +684,11 @@ void PlannerNode::publish_markers_locked(const std::vector<Cell>& pos, const std
   arr.markers.push_back(steps);
   arr.markers.push_back(goal_m);
   arr.markers.push_back(paths);
-#ifdef GD_RHCR_PLANNER_HAS_GROUPS
-  if (auto* gd = dynamic_cast<gdrhcr::GdRhcrPlanner*>(planner_.get())) {
+  {  // the planner's paths (GD-RHCR, RHCR); kept empty on fallback ticks and for PIBT
     auto planned = base("planned_paths", visualization_msgs::Marker::LINE_LIST);
     planned.scale.x = 0.08 * res;
-    for (size_t r = 0; r < pos.size(); ++r) {
-      const auto path = gd->planned_path(static_cast<int>(r));
+    for (size_t r = 0; r < planned_paths.size(); ++r) {
+      const auto& path = planned_paths[r];
       auto colour = palette(group_of[r], 0.7f);
       for (size_t t = 1; t < path.size(); ++t) {
         if (path[t] == path[t - 1]) continue;
@@ -628,7 +700,6 @@ void PlannerNode::publish_markers_locked(const std::vector<Cell>& pos, const std
     }
     arr.markers.push_back(planned);
   }
-#endif
   // Pickup (orange) and delivery (green) cells of the open tasks.
   auto pick = base("pickups", visualization_msgs::Marker::CUBE_LIST);
   pick.scale.x = pick.scale.y = 0.9 * res;
@@ -675,18 +746,25 @@ void PlannerNode::on_diagnostics(const ros::TimerEvent&) {
   double rate = 0;
   if (tick_stamps_.size() >= 2 && now_s - tick_stamps_.front() < 6.0)
     rate = (tick_stamps_.size() - 1) / (tick_stamps_.back() - tick_stamps_.front());
-  static uint64_t last_overruns = 0, last_invalid = 0;
+  static uint64_t last_overruns = 0, last_invalid = 0, last_fallbacks = 0;
   const bool new_overruns = overruns_ > last_overruns, new_invalid = invalid_plans_ > last_invalid;
-  last_overruns = overruns_, last_invalid = invalid_plans_;
+  const bool new_fallbacks = fallback_ticks_ > last_fallbacks;
+  last_overruns = overruns_, last_invalid = invalid_plans_, last_fallbacks = fallback_ticks_;
   if (!fleet_->all_reported()) {
     s.level = diagnostic_msgs::DiagnosticStatus::WARN;
     s.message = std::to_string(fleet_->missing_robots()) + " robots not reporting";
   } else if (new_invalid) {
     s.level = diagnostic_msgs::DiagnosticStatus::ERROR;
     s.message = "planner step rejected; robots held";
+  } else if (store_ && store_errors_ > 0) {
+    s.level = diagnostic_msgs::DiagnosticStatus::ERROR;
+    s.message = "task store write failed";
   } else if (new_overruns) {
     s.level = diagnostic_msgs::DiagnosticStatus::WARN;
     s.message = "tick overruns";
+  } else if (new_fallbacks) {
+    s.level = diagnostic_msgs::DiagnosticStatus::WARN;
+    s.message = "planner missed its deadline; PIBT fallback ticks";
   } else {
     s.level = diagnostic_msgs::DiagnosticStatus::OK;
     s.message = "planning";
@@ -705,6 +783,13 @@ void PlannerNode::on_diagnostics(const ros::TimerEvent&) {
   kv("plan time max (s)", std::to_string(plan_time_max_));
   kv("tick callback max (s)", std::to_string(step_time_max_));
   kv("overruns", std::to_string(overruns_));
+  kv("plan deadline (s)", std::to_string(plan_deadline_));
+  kv("fallback ticks", std::to_string(fallback_ticks_));
+  kv("deadline misses", std::to_string(late_ticks_));
+  kv("planner errors", std::to_string(planner_errors_));
+  kv("offline robots", std::to_string(fleet_->offline_count()));
+  kv("task store", store_ ? store_->path() : std::string("off"));
+  kv("task store errors", std::to_string(store_errors_));
   kv("skipped ticks", std::to_string(skipped_));
   kv("rejected plans", std::to_string(invalid_plans_));
   kv("ignored robot reports", std::to_string(bad_reports_));

@@ -139,3 +139,51 @@ TEST(HoldCascade, HoldsTheChainBehindAStoppedRobot) {
   gdrhcr::StepValidator v(g);
   EXPECT_FALSE(v.check(pos, next).has_value());
 }
+
+TEST(Fleet, SilentRobotGoesOfflineAfterTheTimeoutAndItsLoadIsRequeued) {
+  Grid g = corridor();
+  gdrhcr::DistTable d(g);
+  Fleet f(g, d, 2);
+  std::string err;
+  ASSERT_TRUE(f.update_robot(0, 5, 0, false, false, err, 10.0));  // on the pickup
+  ASSERT_TRUE(f.update_robot(1, 9, 2, false, false, err, 10.0));
+  const auto t = f.submit(5, 0, 0, 2, 0).task_id;
+  f.advance();
+  ASSERT_EQ(f.task(t)->state, kPicked);
+  ASSERT_EQ(f.task(t)->robot, 0);
+  // Robot 1 keeps reporting, robot 0 falls silent.
+  ASSERT_TRUE(f.update_robot(1, 9, 2, false, false, err, 11.5));
+  EXPECT_TRUE(f.mark_silent(12.0, 2.0).empty());  // 2 s without a report: not yet
+  EXPECT_EQ(f.mark_silent(12.5, 2.0), std::vector<int>{0});
+  EXPECT_TRUE(f.mark_silent(13.0, 2.0).empty());  // reported once
+  EXPECT_EQ(f.mode(0), kOffline);
+  EXPECT_EQ(f.offline_count(), 1);
+  f.advance();
+  // Requeued and given to the other robot, which fetches the load from the pickup again.
+  EXPECT_EQ(f.task(t)->state, kAssigned);
+  EXPECT_EQ(f.task(t)->robot, 1);
+  bool requeued = false;
+  for (auto& e : f.take_events())
+    if (e.task_id == t && e.state == kQueued && e.reason.find("stopped reporting carrying the load") != std::string::npos)
+      requeued = true;
+  EXPECT_TRUE(requeued);
+  std::vector<gdrhcr::Cell> pos;
+  f.fill_positions(pos);
+  EXPECT_EQ(pos[0], g.cell(5, 0));  // an obstacle where it was last seen
+  // A report brings it back, idle.
+  ASSERT_TRUE(f.update_robot(0, 5, 0, false, false, err, 20.0));
+  EXPECT_EQ(f.mode(0), kIdle);
+  EXPECT_EQ(f.offline_count(), 0);
+}
+
+TEST(HoldCascade, BlockedCellsHoldTheRobotsEnteringThemAndTheirChain) {
+  Grid g = corridor();
+  // A silent robot may be moving into (3,0): robot 1 planned to enter it, robot 0 follows robot 1.
+  std::vector<gdrhcr::Cell> pos = {g.cell(1, 0), g.cell(2, 0), g.cell(5, 2)};
+  std::vector<gdrhcr::Cell> next = {g.cell(2, 0), g.cell(3, 0), g.cell(6, 2)};
+  std::vector<uint8_t> held(3, 0);
+  EXPECT_EQ(hold_cascade(g, pos, next, held, {g.cell(3, 0)}), 2);
+  EXPECT_EQ(next[0], pos[0]);
+  EXPECT_EQ(next[1], pos[1]);
+  EXPECT_EQ(next[2], g.cell(6, 2));
+}

@@ -100,8 +100,16 @@ int GdRhcrPlanner::offset_of(int agent, int t) const {
   return plan_of_[agent] ? t - plan_of_[agent]->start_time : 0;
 }
 
+std::vector<PlannerGroup> GdRhcrPlanner::groups() const {
+  std::vector<PlannerGroup> out;
+  out.reserve(last_groups_.size());
+  for (auto& g : last_groups_) out.push_back({g.agents, to_string(g.action)});
+  return out;
+}
+
 std::vector<Cell> GdRhcrPlanner::planned_path(int agent) const {
-  const auto& plan = plan_of_.at(agent);
+  if (agent < 0 || agent >= static_cast<int>(plan_of_.size())) return {};
+  const auto& plan = plan_of_[agent];
   if (!plan) return {};
   const auto& path = plan->paths[slot_of_[agent]];
   const int from = std::clamp(now_ - plan->start_time, 0, static_cast<int>(path.size()) - 1);

@@ -7,7 +7,17 @@
 
 namespace gdrhcr {
 
-const std::string* Params::lookup(const std::string& key) {
+std::string Params::canonical(const std::string& key) {
+  std::string k = key;
+  for (char& c : k) {
+    if (c == '_') c = '-';
+    else if (key.size() > 1 && c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  }
+  return k;
+}
+
+const std::string* Params::lookup(const std::string& raw) {
+  const std::string key = canonical(raw);
   used_.insert(key);
   auto it = values_.find(key);
   return it == values_.end() ? nullptr : &it->second;

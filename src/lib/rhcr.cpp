@@ -25,6 +25,7 @@ bool RhcrPlanner::on_plan(const WorldView& world) const {
 StepReport RhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& next) {
   const int n = world.num_agents();
   StepReport report;
+  now_ = world.timestep;
   const bool period_over = !started_ || world.timestep - plan_start_ >= cfg_.alpha;
   bool replan = period_over;
   if (!replan && have_plan_ && !on_plan(world)) {
@@ -67,6 +68,13 @@ StepReport RhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& nex
     ++fallback_steps_;
   }
   return report;
+}
+
+std::vector<Cell> RhcrPlanner::planned_path(int agent) const {
+  if (!have_plan_ || agent < 0 || agent >= static_cast<int>(plan_.size())) return {};
+  const auto& path = plan_[agent];
+  const size_t from = std::min<size_t>(std::max(0, now_ - plan_start_), path.size() - 1);
+  return std::vector<Cell>(path.begin() + from, path.end());
 }
 
 nlohmann::json RhcrPlanner::params() const {

@@ -49,8 +49,11 @@ struct SubmitResult {
 struct RobotRecord {
   bool reported = false;
   Cell cell = gdrhcr::kNoCell;
-  bool offline = false;
+  bool offline = false;           // reported_offline || silent: an obstacle, gets no task
+  bool reported_offline = false;  // the robot's own report (mode OFFLINE)
+  bool silent = false;            // no report for longer than the offline timeout
   bool moving = false;
+  double last_report = 0;         // time of the last accepted report (caller's clock, s)
   int64_t task = -1;
 };
 
@@ -64,16 +67,24 @@ class Fleet {
   SubmitResult submit(int pickup_x, int pickup_y, int delivery_x, int delivery_y, int priority,
                       uint64_t requested_id = 0);
   bool cancel(uint64_t task_id, std::string& reason);
-  // A robot's report. Returns false with `error` set for an unknown id or a cell that is off
-  // the map or blocked; the report is then ignored.
-  bool update_robot(int64_t id, int x, int y, bool offline, bool moving, std::string& error);
+  // A robot's report at time `now` (seconds, any clock the caller also passes to mark_silent).
+  // Returns false with `error` set for an unknown id or a cell that is off the map or blocked;
+  // the report is then ignored. A report brings a silent robot back.
+  bool update_robot(int64_t id, int x, int y, bool offline, bool moving, std::string& error,
+                    double now = 0);
+  // Robots that have reported before but not within `timeout` seconds of `now` become silent:
+  // offline (an obstacle at their last cell) until they report again; advance() then requeues
+  // their tasks. Returns the robots that became silent in this call.
+  std::vector<int> mark_silent(double now, double timeout);
+  int offline_count() const;
   bool all_reported() const;
   int missing_robots() const;
   // Robots on the same cell (a report error); empty when the positions are consistent.
   std::string position_conflict() const;
 
   // Status transitions from the robots' cells (picked, delivered; tasks of robots that went
-  // offline), then greedy assignment of queued tasks to the nearest idle robots.
+  // offline are requeued, also picked ones: the load on a dead robot is fetched again from the
+  // pickup), then greedy assignment of queued tasks to the nearest idle robots.
   void advance();
   // Goal sequences for the WorldView: to-pickup robots [pickup, delivery], to-delivery robots
   // [delivery], idle and offline robots [their cell].
@@ -90,6 +101,15 @@ class Fleet {
   int distance_left(uint64_t id) const;
 
   size_t count_in_state(uint8_t s) const;
+  // Unfinished tasks, for the task store.
+  std::vector<TaskRecord> open_tasks() const;
+  // Re-creates tasks from the task store after a restart (before any report). Each task is
+  // validated against the map again (a task whose cells are no longer valid fails with the
+  // reason); assigned and picked tasks go back to their robot when it exists and holds no other
+  // task, else to the queue. Returns the number of tasks restored as open.
+  size_t restore(const std::vector<TaskRecord>& open, uint64_t delivered, uint64_t failed,
+                 uint64_t next_id);
+  uint64_t next_id() const { return next_id_; }
   uint64_t delivered_total() const { return delivered_; }
   uint64_t failed_total() const { return failed_; }
   // Finished tasks beyond this many are forgotten (oldest first).
@@ -111,11 +131,12 @@ class Fleet {
   size_t finished_limit_ = 10000;
 };
 
-// The safety cascade: robots with held[i] set stay where they are; then every robot whose
-// planned next cell is the current cell of a held robot is held too, until nothing changes.
-// Holding only replaces moves by waits, so a valid plan stays free of swaps, and afterwards no
-// robot enters a cell whose occupant may not leave. Returns the number of robots held.
+// The safety cascade: robots with held[i] set stay where they are, and so does every robot
+// whose planned next cell is in `blocked` (cells a silent robot may be moving into); then every
+// robot whose planned next cell is the current cell of a held robot is held too, until nothing
+// changes. Holding only replaces moves by waits, so a valid plan stays free of swaps, and
+// afterwards no robot enters a cell whose occupant may not leave. Returns the number held.
 int hold_cascade(const gdrhcr::Grid& grid, const std::vector<Cell>& pos, std::vector<Cell>& next,
-                 std::vector<uint8_t>& held);
+                 std::vector<uint8_t>& held, const std::vector<Cell>& blocked = {});
 
 }  // namespace gd_rhcr_planner

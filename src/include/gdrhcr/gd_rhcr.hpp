@@ -62,8 +62,9 @@ class GdRhcrPlanner : public Planner {
 
   // The groups of the last step, with what each did (for rviz and diagnostics).
   const std::vector<GroupInfo>& last_groups() const { return last_groups_; }
+  std::vector<PlannerGroup> groups() const override;
   // Agent i's planned cells from the current step on (its cached plan's remainder).
-  std::vector<Cell> planned_path(int agent) const;
+  std::vector<Cell> planned_path(int agent) const override;
   int k_threshold() const { return k_threshold_; }
 
  private:

@@ -19,8 +19,12 @@ class ParamError : public std::invalid_argument {
 
 class Params {
  public:
-  void set(const std::string& key, const std::string& value) { values_[key] = value; }
-  bool has(const std::string& key) const { return values_.count(key) > 0; }
+  // Keys are canonical: '_' reads as '-' and names longer than one letter are lower case, so
+  // the paper's and ROS's spellings (c_soft, K_threshold, node_budget) name the same parameter
+  // as the command line's (c-soft, k-threshold, node-budget); one-letter names (V, H) keep case.
+  static std::string canonical(const std::string& key);
+  void set(const std::string& key, const std::string& value) { values_[canonical(key)] = value; }
+  bool has(const std::string& key) const { return values_.count(canonical(key)) > 0; }
 
   int get_int(const std::string& key, int fallback, int min, int max);
   double get_double(const std::string& key, double fallback, double min, double max);

@@ -27,6 +27,12 @@ struct WorldView {
   int num_agents() const { return static_cast<int>(positions.size()); }
 };
 
+// A group of agents planned together in the last step, and the solver that moved it.
+struct PlannerGroup {
+  std::vector<int> agents;
+  std::string solver;  // what moved it, e.g. GD-RHCR's "primary", "reused", "threshold_fallback"
+};
+
 struct StepReport {
   bool planned = false;     // a solver ran in this step (RHCR plans only every alpha steps)
   double plan_time_s = 0;   // the planner's plan-time metric for this step
@@ -44,6 +50,11 @@ class Planner {
   virtual nlohmann::json params() const = 0;
   // Planner-specific counters for the result record (solver calls, fallbacks, groups, ...).
   virtual nlohmann::json stats() const { return nlohmann::json::object(); }
+  // Introspection for visualisation (rviz markers, plots); call it between steps only.
+  // The groups of the last step; empty for planners that do not group agents.
+  virtual std::vector<PlannerGroup> groups() const { return {}; }
+  // Agent i's planned cells from the current step on; empty when the planner keeps no plan.
+  virtual std::vector<Cell> planned_path(int /*agent*/) const { return {}; }
 };
 
 // Builds a planner from parameters (e.g. --H 20 from the command line or a ROS param).

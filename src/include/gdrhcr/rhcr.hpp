@@ -34,6 +34,8 @@ class RhcrPlanner : public Planner {
   nlohmann::json stats() const override;
 
   const RhcrConfig& config() const { return cfg_; }
+  // Agent i's cells from the last planned step on; empty while PIBT moves the fleet.
+  std::vector<Cell> planned_path(int agent) const override;
 
  private:
   bool on_plan(const WorldView& world) const;
@@ -45,6 +47,7 @@ class RhcrPlanner : public Planner {
   int plan_start_ = 0;                   // timestep the plan (or the fallback period) started
   bool have_plan_ = false;               // else PIBT until plan_start_ + alpha
   bool started_ = false;
+  int now_ = 0;  // the timestep of the last plan_step
 
   long solver_calls_ = 0, solver_failures_ = 0, timeouts_ = 0, fallback_steps_ = 0;
   long deviation_replans_ = 0, nodes_ = 0, sipp_calls_ = 0;

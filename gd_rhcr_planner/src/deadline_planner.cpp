@@ -1,0 +1,105 @@
+#include "gd_rhcr_planner/deadline_planner.hpp"
+
+#include <chrono>
+
+namespace gd_rhcr_planner {
+
+// One primary step: the worker owns copies of the world's vectors, since the tick that asked
+// for it may have moved on by the time the planner returns.
+struct DeadlinePlanner::Job {
+  const gdrhcr::Grid* grid;
+  const gdrhcr::DistTable* dist;
+  int timestep;
+  std::vector<gdrhcr::Cell> positions;
+  std::vector<std::vector<gdrhcr::Cell>> goals;
+  std::vector<gdrhcr::Cell> next;
+  gdrhcr::StepReport report;
+  std::string error;
+  bool started = false, done = false;
+};
+
+DeadlinePlanner::DeadlinePlanner(std::unique_ptr<gdrhcr::Planner> primary,
+                                 std::unique_ptr<gdrhcr::Planner> fallback)
+    : primary_(std::move(primary)), fallback_(std::move(fallback)) {
+  worker_ = std::thread([this] { worker_loop(); });
+}
+
+DeadlinePlanner::~DeadlinePlanner() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  cv_.notify_all();
+  worker_.join();
+}
+
+void DeadlinePlanner::worker_loop() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  for (;;) {
+    cv_.wait(lock, [this] { return stop_ || (job_ && !job_->started); });
+    if (job_ && !job_->started) {
+      std::shared_ptr<Job> job = job_;
+      job->started = true;
+      lock.unlock();
+      gdrhcr::WorldView world{*job->grid, *job->dist, job->timestep, job->positions, job->goals};
+      try {
+        job->report = primary_->plan_step(world, job->next);
+      } catch (const std::exception& e) {
+        job->error = e.what();
+      }
+      lock.lock();
+      job->done = true;
+      cv_.notify_all();
+    }
+    if (stop_) return;
+  }
+}
+
+bool DeadlinePlanner::primary_idle() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return !job_ || job_->done;
+}
+
+void DeadlinePlanner::wait_idle() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  cv_.wait(lock, [this] { return !job_ || job_->done; });
+}
+
+DeadlineOutcome DeadlinePlanner::step(const gdrhcr::WorldView& world, std::vector<gdrhcr::Cell>& next,
+                                      double deadline_s) {
+  DeadlineOutcome out;
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (job_ && !job_->done) {
+      out.primary_busy = true;
+    } else {
+      auto job = std::make_shared<Job>();
+      job->grid = &world.grid;
+      job->dist = &world.dist;
+      job->timestep = world.timestep;
+      job->positions = world.positions;
+      job->goals = world.goals;
+      job->next = next;
+      job_ = job;
+      cv_.notify_all();
+      auto finished = [&] { return job->done; };
+      if (deadline_s > 0) {
+        cv_.wait_for(lock, std::chrono::duration<double>(deadline_s), finished);
+      } else {
+        cv_.wait(lock, finished);
+      }
+      if (job->done && job->error.empty()) {
+        next = job->next;
+        out.report = job->report;
+        return out;
+      }
+      if (job->done) out.primary_error = job->error;
+      else out.primary_late = true;
+    }
+  }
+  out.fallback = true;
+  out.report = fallback_->plan_step(world, next);
+  return out;
+}
+
+}  // namespace gd_rhcr_planner
