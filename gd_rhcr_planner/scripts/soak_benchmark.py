@@ -23,8 +23,8 @@ Also: ticks and robot-steps (robots x ticks, from `step_commands`), planner_stat
 and plan time percentiles, overruns, skipped ticks, forced waits), the last planner and
 fleet_sim /diagnostics values, and the planner node's resident memory (VmRSS of the pid the node
 reports through the ROS master/XML-RPC getPid; sampled every ~memory_period s; start = at the
-first step command, end, peak, the kernel's VmHWM, and a linear growth rate over the run after
-its first 10 %).
+first step command, end, peak, the kernel's VmHWM, and a linear growth rate over the second
+half of the run, after the warm-up in which the open tasks pile up).
 
 Stops after ~robot_steps robot-steps (default 100000) or ~duration s (default 0 = no limit) of
 wall time from the first step command, whichever comes first, or when no step command came for
@@ -490,7 +490,7 @@ class Soak(object):
         slope = None
         if self.mem_samples and wall > 0:
             after = [(t - self.t_first, kb / 1024.0) for t, kb in self.mem_samples
-                     if self.t_first and t - self.t_first >= 0.1 * wall]
+                     if self.t_first and t - self.t_first >= 0.5 * wall]
             s = linear_slope(after)
             slope = s * 3600.0 if s is not None else None
 
@@ -653,7 +653,7 @@ class Soak(object):
                      f(ps["tick_callback_s"][k]) for k in ("p50", "p90", "p99", "max")),
                  "plan time          p50 %s  p99 %s  max %s s" % tuple(
                      f(ps["plan_time_s"][k]) for k in ("p50", "p99", "max")),
-                 "memory (planner)   start %s MB, end %s MB, peak %s MB (VmHWM %s MB), growth %s MB/h%s" % (
+                 "memory (planner)   start %s MB, end %s MB, peak %s MB (VmHWM %s MB), growth %s MB/h (2nd half)%s" % (
                      f(m["rss_start_mb"], "%.1f"), f(m["rss_end_mb"], "%.1f"), f(m["rss_peak_sampled_mb"], "%.1f"),
                      f(m["vm_hwm_mb"], "%.1f"), f(m["rss_growth_mb_per_hour"], "%.1f"),
                      (" (" + m["error"] + ")") if m["error"] else "")]
