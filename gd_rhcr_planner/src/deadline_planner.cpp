@@ -12,6 +12,9 @@ struct DeadlinePlanner::Job {
   int timestep;
   std::vector<gdrhcr::Cell> positions;
   std::vector<std::vector<gdrhcr::Cell>> goals;
+  std::vector<uint8_t> immovable;
+  bool has_immovable = false;
+  std::shared_ptr<const void> keep_alive;
   std::vector<gdrhcr::Cell> next;
   gdrhcr::StepReport report;
   std::string error;
@@ -42,12 +45,14 @@ void DeadlinePlanner::worker_loop() {
       job->started = true;
       lock.unlock();
       gdrhcr::WorldView world{*job->grid, *job->dist, job->timestep, job->positions, job->goals};
+      if (job->has_immovable) world.immovable = &job->immovable;
       try {
         job->report = primary_->plan_step(world, job->next);
       } catch (const std::exception& e) {
         job->error = e.what();
       }
       lock.lock();
+      job->keep_alive.reset();
       job->done = true;
       cv_.notify_all();
     }
@@ -66,7 +71,7 @@ void DeadlinePlanner::wait_idle() {
 }
 
 DeadlineOutcome DeadlinePlanner::step(const gdrhcr::WorldView& world, std::vector<gdrhcr::Cell>& next,
-                                      double deadline_s) {
+                                      double deadline_s, std::shared_ptr<const void> keep_alive) {
   DeadlineOutcome out;
   {
     std::unique_lock<std::mutex> lock(mutex_);
@@ -79,6 +84,8 @@ DeadlineOutcome DeadlinePlanner::step(const gdrhcr::WorldView& world, std::vecto
       job->timestep = world.timestep;
       job->positions = world.positions;
       job->goals = world.goals;
+      if (world.immovable) job->immovable = *world.immovable, job->has_immovable = true;
+      job->keep_alive = std::move(keep_alive);
       job->next = next;
       job_ = job;
       cv_.notify_all();

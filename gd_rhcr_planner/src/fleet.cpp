@@ -169,6 +169,14 @@ void Fleet::forget_old_finished() {
 }
 
 void Fleet::advance() {
+  // Cells where offline robots stand: a pickup there cannot be reached until they leave.
+  std::map<Cell, int> offline_at;
+  for (int r = 0; r < num_robots(); ++r)
+    if (robots_[r].reported && robots_[r].offline) offline_at.emplace(robots_[r].cell, r);
+  auto blocker = [&](Cell c) {
+    auto it = offline_at.find(c);
+    return it == offline_at.end() ? -1 : it->second;
+  };
   // Transitions of the robots' tasks.
   for (int r = 0; r < num_robots(); ++r) {
     RobotRecord& rob = robots_[r];
@@ -187,6 +195,13 @@ void Fleet::advance() {
                     (t.state == kPicked ? " carrying the load; requeued from the pickup" : "; requeued"));
       continue;
     }
+    if (t.state == kAssigned && blocker(t.pickup) >= 0) {  // its pickup is under a dead robot
+      rob.task = -1;
+      set_state(t, kQueued, -1,
+                "pickup " + grid_.describe(t.pickup) + " is blocked by offline robot " +
+                    std::to_string(blocker(t.pickup)) + "; waiting in the queue");
+      continue;
+    }
     if (t.state == kAssigned && rob.cell == t.pickup) set_state(t, kPicked, r, "");
     if (t.state == kPicked && rob.cell == t.delivery) {
       set_state(t, kDelivered, r, "");
@@ -201,7 +216,7 @@ void Fleet::advance() {
   if (idle.empty()) return;
   std::vector<TaskRecord*> queued;
   for (auto& [id, t] : tasks_)
-    if (t.state == kQueued) queued.push_back(&t);
+    if (t.state == kQueued && blocker(t.pickup) < 0 && blocker(t.delivery) < 0) queued.push_back(&t);
   std::stable_sort(queued.begin(), queued.end(),
                    [](const TaskRecord* a, const TaskRecord* b) { return a->priority > b->priority; });
   for (TaskRecord* t : queued) {

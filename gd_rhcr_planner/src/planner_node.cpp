@@ -135,6 +135,10 @@ class PlannerNode {
   // The core.
   std::unique_ptr<LoadedMap> map_;
   std::unique_ptr<gdrhcr::DistTable> dist_;
+  // Distances around the robots that are offline now (they are obstacles until they return);
+  // rebuilt when that set changes. Null while every robot is online.
+  std::shared_ptr<const gdrhcr::DistTable> offline_dist_;
+  std::vector<Cell> offline_cells_;
   std::unique_ptr<DeadlinePlanner> planner_;
   std::unique_ptr<gdrhcr::StepValidator> validator_;
   std::unique_ptr<Fleet> fleet_;
@@ -467,9 +471,9 @@ void PlannerNode::publish_events_locked() {
 void PlannerNode::on_tick(const ros::TimerEvent& ev) {
   const auto wall0 = std::chrono::steady_clock::now();
   const double period = 1.0 / tick_rate_;
-  std::vector<Cell> pos, next, blocked;
+  std::vector<Cell> pos, next, blocked, offline_cells;
   std::vector<std::vector<Cell>> goals;
-  std::vector<uint8_t> held;
+  std::vector<uint8_t> held, immovable;
   uint64_t tick;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -495,22 +499,34 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     fleet_->fill_positions(pos);
     fleet_->fill_goals(goals);
     held.assign(pos.size(), 0);
+    immovable.assign(pos.size(), 0);
     for (int r = 0; r < fleet_->num_robots(); ++r) {
       const auto& rob = fleet_->robot(r);
       held[r] = rob.offline || rob.moving;
+      immovable[r] = rob.offline;
+      if (rob.offline) offline_cells.push_back(rob.cell);
       // A silent robot may be on its way into the cell last commanded: nobody else enters it.
       if (rob.silent && r < static_cast<int>(last_next_.size()) && last_next_[r] != rob.cell)
         blocked.push_back(last_next_[r]);
     }
   }
 
-  // Plan outside the lock, so services and state updates keep flowing.
+  // Plan outside the lock, so services and state updates keep flowing. Offline robots are
+  // immovable obstacles: the planner keeps them in place and its distances route around them.
   const auto& grid = map_->grid;
-  gdrhcr::WorldView world{grid, *dist_, static_cast<int>(tick), pos, goals};
+  if (offline_cells != offline_cells_) {
+    offline_cells_ = offline_cells;
+    offline_dist_.reset();
+    if (!offline_cells.empty())
+      offline_dist_ = std::make_shared<const gdrhcr::DistTable>(grid, offline_cells, size_t(dist_budget_mb_) << 20);
+  }
+  const gdrhcr::DistTable& dist = offline_dist_ ? *offline_dist_ : *dist_;
+  gdrhcr::WorldView world{grid, dist, static_cast<int>(tick), pos, goals};
+  if (!offline_cells.empty()) world.immovable = &immovable;
   next = pos;
   std::string plan_error;
   // The planner gets plan_deadline; past it (or if it throws) PIBT moves the fleet this tick.
-  const DeadlineOutcome outcome = planner_->step(world, next, plan_deadline_);
+  const DeadlineOutcome outcome = planner_->step(world, next, plan_deadline_, offline_dist_);
   const gdrhcr::StepReport& report = outcome.report;
   const int held_count = hold_cascade(grid, pos, next, held, blocked);
   auto violation = validator_->check(pos, next);

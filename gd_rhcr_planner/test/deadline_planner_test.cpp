@@ -41,11 +41,13 @@ class ScriptedPlanner : public gdrhcr::Planner {
   bool throw_now = false;
   std::atomic<int> calls{0};
   std::atomic<int>* finished = nullptr;  // counts completed steps; outlives the planner
+  std::vector<uint8_t> seen_immovable;    // what the last call saw of WorldView::immovable
   std::string name() const override { return "scripted"; }
   gdrhcr::StepReport plan_step(const gdrhcr::WorldView& w, std::vector<Cell>& next) override {
     ++calls;
     if (gate) gate->wait();
     if (throw_now) throw std::runtime_error("scripted failure");
+    seen_immovable = w.immovable ? *w.immovable : std::vector<uint8_t>{};
     for (int i = 0; i < w.num_agents(); ++i) {
       const int x = w.grid.x_of(w.positions[i]) + 1, y = w.grid.y_of(w.positions[i]);
       next[i] = w.grid.in_bounds(x, y) && w.grid.is_free(w.grid.cell(x, y)) ? w.grid.cell(x, y) : w.positions[i];
@@ -114,6 +116,24 @@ TEST(DeadlinePlanner, FallsBackWhileThePrimaryIsLateAndDiscardsItsLateStep) {
   EXPECT_FALSE(out.fallback);
   EXPECT_EQ(p->calls, 2);
   EXPECT_EQ(next[0], w.grid.cell(w.grid.x_of(w.pos[0]) + 1, w.grid.y_of(w.pos[0])));
+}
+
+TEST(DeadlinePlanner, TheWorkerSeesTheImmovableAgentsAndKeepsTheDistTableAlive) {
+  World w;
+  auto primary = std::make_unique<ScriptedPlanner>();
+  auto* p = primary.get();
+  DeadlinePlanner dp(std::move(primary), pibt(w.grid));
+  std::vector<uint8_t> immovable = {0, 1};
+  auto dist = std::make_shared<const gdrhcr::DistTable>(w.grid, std::vector<Cell>{w.pos[1]});
+  std::weak_ptr<const gdrhcr::DistTable> watch = dist;
+  gdrhcr::WorldView world{w.grid, *dist, 0, w.pos, w.goals};
+  world.immovable = &immovable;
+  std::vector<Cell> next = w.pos;
+  auto out = dp.step(world, next, 0, dist);
+  EXPECT_FALSE(out.fallback);
+  EXPECT_EQ(p->seen_immovable, immovable);
+  dist.reset();
+  EXPECT_TRUE(watch.expired()) << "the finished step still holds the DistTable";
 }
 
 TEST(DeadlinePlanner, FallsBackWhenThePrimaryThrows) {

@@ -151,6 +151,7 @@ TEST(Fleet, SilentRobotGoesOfflineAfterTheTimeoutAndItsLoadIsRequeued) {
   f.advance();
   ASSERT_EQ(f.task(t)->state, kPicked);
   ASSERT_EQ(f.task(t)->robot, 0);
+  ASSERT_TRUE(f.update_robot(0, 4, 0, false, false, err, 10.0));  // one step off the pickup
   // Robot 1 keeps reporting, robot 0 falls silent.
   ASSERT_TRUE(f.update_robot(1, 9, 2, false, false, err, 11.5));
   EXPECT_TRUE(f.mark_silent(12.0, 2.0).empty());  // 2 s without a report: not yet
@@ -169,9 +170,9 @@ TEST(Fleet, SilentRobotGoesOfflineAfterTheTimeoutAndItsLoadIsRequeued) {
   EXPECT_TRUE(requeued);
   std::vector<gdrhcr::Cell> pos;
   f.fill_positions(pos);
-  EXPECT_EQ(pos[0], g.cell(5, 0));  // an obstacle where it was last seen
+  EXPECT_EQ(pos[0], g.cell(4, 0));  // an obstacle where it was last seen
   // A report brings it back, idle.
-  ASSERT_TRUE(f.update_robot(0, 5, 0, false, false, err, 20.0));
+  ASSERT_TRUE(f.update_robot(0, 4, 0, false, false, err, 20.0));
   EXPECT_EQ(f.mode(0), kIdle);
   EXPECT_EQ(f.offline_count(), 0);
 }
@@ -186,4 +187,32 @@ TEST(HoldCascade, BlockedCellsHoldTheRobotsEnteringThemAndTheirChain) {
   EXPECT_EQ(next[0], pos[0]);
   EXPECT_EQ(next[1], pos[1]);
   EXPECT_EQ(next[2], g.cell(6, 2));
+}
+
+TEST(Fleet, TasksUnderAnOfflineRobotWaitInTheQueue) {
+  Grid g = corridor();
+  gdrhcr::DistTable d(g);
+  Fleet f(g, d, 3);
+  report(f, 0, 0, 0);
+  report(f, 1, 9, 0);
+  report(f, 2, 9, 2);
+  const auto t = f.submit(5, 0, 0, 2, 0).task_id;
+  f.advance();
+  const int holder = f.task(t)->robot;
+  ASSERT_GE(holder, 0);
+  // Robot 2 dies on the pickup cell: the task goes back to the queue and is not handed out.
+  std::string err;
+  ASSERT_TRUE(f.update_robot(2, 5, 0, true, false, err));
+  f.advance();
+  EXPECT_EQ(f.task(t)->state, kQueued);
+  EXPECT_NE(f.task(t)->reason.find("blocked by offline robot 2"), std::string::npos) << f.task(t)->reason;
+  f.advance();
+  EXPECT_EQ(f.task(t)->state, kQueued);
+  const auto other = f.submit(9, 2, 0, 2, 0).task_id;  // unaffected tasks still go out
+  f.advance();
+  EXPECT_EQ(f.task(other)->state, kAssigned);
+  // It leaves: the task is assigned again.
+  ASSERT_TRUE(f.update_robot(2, 6, 0, false, false, err));
+  f.advance();
+  EXPECT_EQ(f.task(t)->state, kAssigned);
 }

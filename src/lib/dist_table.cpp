@@ -5,7 +5,8 @@
 
 namespace gdrhcr {
 
-DistRow::DistRow(const Grid& grid, Cell goal) : goal_(goal), dist_(grid.num_cells(), kUnreachable) {
+DistRow::DistRow(const Grid& grid, Cell goal, const std::vector<uint8_t>* blocked)
+    : goal_(goal), dist_(grid.num_cells(), kUnreachable) {
   std::vector<Cell> queue;
   queue.reserve(grid.free_cells().size());
   dist_[goal] = 0;
@@ -14,7 +15,7 @@ DistRow::DistRow(const Grid& grid, Cell goal) : goal_(goal), dist_(grid.num_cell
     const Cell c = queue[head];
     const int32_t d = dist_[c] + 1;
     for (Cell n : grid.neighbours(c)) {
-      if (dist_[n] != kUnreachable) continue;
+      if (dist_[n] != kUnreachable || (blocked && (*blocked)[n])) continue;
       dist_[n] = d;
       queue.push_back(n);
     }
@@ -22,6 +23,14 @@ DistRow::DistRow(const Grid& grid, Cell goal) : goal_(goal), dist_(grid.num_cell
 }
 
 DistTable::DistTable(const Grid& grid, size_t budget_bytes) : grid_(grid), budget_(budget_bytes) {}
+
+DistTable::DistTable(const Grid& grid, const std::vector<Cell>& blocked, size_t budget_bytes)
+    : grid_(grid), budget_(budget_bytes) {
+  if (blocked.empty()) return;
+  blocked_.assign(grid.num_cells(), 0);
+  for (Cell c : blocked)
+    if (grid.valid_cell(c)) blocked_[c] = 1;
+}
 
 std::shared_ptr<const DistRow> DistTable::row(Cell goal) const {
   if (!grid_.is_free(goal))
@@ -36,7 +45,7 @@ std::shared_ptr<const DistRow> DistTable::row(Cell goal) const {
     }
   }
   // BFS outside the lock: two threads may race to compute the same row; one copy wins.
-  auto fresh = std::make_shared<const DistRow>(grid_, goal);
+  auto fresh = std::make_shared<const DistRow>(grid_, goal, blocked_.empty() ? nullptr : &blocked_);
   ++bfs_count_;
   std::unique_lock lock(mutex_);
   auto [it, inserted] = rows_.try_emplace(goal);

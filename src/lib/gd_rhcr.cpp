@@ -131,6 +131,10 @@ bool GdRhcrPlanner::needs_replan(const WorldView& world, const std::vector<int>&
     if (k < 0 || k >= p->valid_steps) return true;
     const auto& path = p->paths[slot_of_[i]];
     if (k + 1 >= static_cast<int>(path.size()) || path[k] != world.positions[i]) return true;
+    if (world.is_immovable(i) && path[k + 1] != path[k]) return true;  // went offline since
+    if (world.immovable)  // the plan runs into a robot that went offline since
+      for (size_t s = k + 1; s < path.size(); ++s)
+        if (immovable_at_[path[s]] && path[s] != world.positions[i]) return true;
     const Cell goal = world.goals[i].empty() ? kNoCell : world.goals[i][0];
     const auto& planned_goals = p->goals[slot_of_[i]];
     if (goal != kNoCell && std::find(planned_goals.begin(), planned_goals.end(), goal) == planned_goals.end())
@@ -176,18 +180,34 @@ void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
       soft.add_path(rest);
     }
   }
-  std::vector<Cell> starts;
+  // Immovable agents (offline robots) are not planned: every path avoids their cells, theirs
+  // and those of the other groups (hard, as they will not move whatever anyone plans).
+  std::vector<Cell> starts, blocked;
   std::vector<std::vector<Cell>> goals;
+  std::vector<int> planned;
   for (int i : agents) {
+    if (world.is_immovable(i)) continue;
+    planned.push_back(i);
     starts.push_back(world.positions[i]);
     goals.push_back(world.goals[i]);
   }
+  if (world.immovable)
+    for (int j = 0; j < world.num_agents(); ++j)
+      if ((*world.immovable)[j]) blocked.push_back(world.positions[j]);
   PbsConfig pc;
   pc.horizon = cfg_.H;
   pc.c_soft = cfg_.c_soft;
   pc.time_limit_s = cfg_.timeout_s;
   pc.node_budget = cfg_.node_budget;
+  pc.blocked_cells = blocked.empty() ? nullptr : &blocked;
   job.result = solve_pbs(grid_, world.dist, starts, goals, soft.empty() ? nullptr : &soft, pc);
+  if (job.result.success && planned.size() != agents.size()) {  // back in group order
+    std::vector<std::vector<Cell>> paths(agents.size());
+    for (size_t a = 0, k = 0; a < agents.size(); ++a)
+      paths[a] = world.is_immovable(agents[a]) ? std::vector<Cell>(cfg_.H + 1, world.positions[agents[a]])
+                                              : std::move(job.result.paths[k++]);
+    job.result.paths = std::move(paths);
+  }
 }
 
 void GdRhcrPlanner::adopt_one_step_plans(const WorldView& world, const std::vector<int>& agents,
@@ -275,6 +295,11 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
   const int t = world.timestep;
   now_ = t;
   partition_.compute(world.positions, cfg_.V);
+  if (world.immovable) {
+    immovable_at_.assign(grid_.num_cells(), 0);
+    for (int i = 0; i < n; ++i)
+      if ((*world.immovable)[i]) immovable_at_[world.positions[i]] = 1;
+  }
   const auto& groups = partition_.groups();
 
   last_groups_.assign(groups.size(), GroupInfo{});

@@ -125,6 +125,11 @@ class PbsSearch {
   }
   int plan(int k);  // SIPP for agent k against its ancestors (the table is filled); path id or -1
   void fill_table(int k);
+  void block_cells(ConstraintTable& table) const {
+    if (!cfg_.blocked_cells) return;
+    for (Cell c : *cfg_.blocked_cells)
+      for (int t = 0; t <= table.horizon(); ++t) table.block_vertex(c, t);
+  }
   bool reaches(int from, int target);  // target is below `from` (or is it)
   void add_order(int hi, int lo) { lower_[hi].push_back(lo), higher_[lo].push_back(hi); }
   void remove_order(int hi, int lo) { lower_[hi].pop_back(), higher_[lo].pop_back(); }
@@ -160,6 +165,7 @@ void PbsSearch::fill_table(int k) {
   // All (transitive) ancestors of k are hard constraints.
   ConstraintTable& table = *ws_.table;
   table.clear();
+  block_cells(table);
   ++mark_stamp_;
   queue_.assign(higher_[k].begin(), higher_[k].end());
   for (int a : queue_) mark_[a] = mark_stamp_;
@@ -287,8 +293,9 @@ int PbsSearch::relevant_depth(int node, const PbsCollision& c) {
 }
 
 void PbsSearch::run(PbsResult& out) {
-  // Root: every agent on its own (soft constraints only).
+  // Root: every agent on its own (soft constraints and blocked cells only).
   ws_.table->clear();
+  block_cells(*ws_.table);
   for (int k = 0; k < n_; ++k) {
     const int id = plan(k);
     if (id < 0) {

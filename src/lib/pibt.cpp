@@ -49,6 +49,10 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
     occupied_now_[world.positions[i]] = i;
     next[i] = kNoCell;
   }
+  // Immovable agents stay: their cell is taken for t+1, so nobody pushes them or moves in.
+  if (world.immovable)
+    for (int i : order_)
+      if ((*world.immovable)[i]) next[i] = world.positions[i], occupied_next_[world.positions[i]] = i;
   // Agents outside this call keep their moves; their cells at t and t+1 are off limits, which
   // rules out both vertex and swap conflicts with them.
   for (auto& [from, to] : fixed_moves) {

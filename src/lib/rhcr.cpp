@@ -17,8 +17,21 @@ RhcrPlanner::RhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, RhcrCo
 
 bool RhcrPlanner::on_plan(const WorldView& world) const {
   const int k = world.timestep - plan_start_;
-  for (int i = 0; i < world.num_agents(); ++i)
-    if (plan_[i][std::min<size_t>(k, plan_[i].size() - 1)] != world.positions[i]) return false;
+  std::vector<uint8_t> immovable_at;
+  if (world.immovable) {
+    immovable_at.assign(world.grid.num_cells(), 0);
+    for (int i = 0; i < world.num_agents(); ++i)
+      if ((*world.immovable)[i]) immovable_at[world.positions[i]] = 1;
+  }
+  for (int i = 0; i < world.num_agents(); ++i) {
+    const auto& p = plan_[i];
+    if (!immovable_at.empty() && !world.is_immovable(i))
+      for (size_t s = k + 1; s < p.size(); ++s)
+        if (immovable_at[p[s]]) return false;  // runs into a robot that went offline since
+    if (p[std::min<size_t>(k, p.size() - 1)] != world.positions[i]) return false;
+    // A robot that went offline after the plan was made cannot make its planned moves.
+    if (world.is_immovable(i) && p[std::min<size_t>(k + 1, p.size() - 1)] != world.positions[i]) return false;
+  }
   return true;
 }
 
@@ -36,15 +49,26 @@ StepReport RhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& nex
     started_ = true;
     plan_start_ = world.timestep;
     // An agent without a known goal just keeps its cell (a one-goal sequence it already meets).
-    std::vector<std::vector<Cell>> goals(world.goals.begin(), world.goals.end());
-    for (int i = 0; i < n; ++i)
-      if (goals[i].empty()) goals[i] = {world.positions[i]};
+    // Immovable agents are not planned: their cells are blocked for everyone else.
+    std::vector<int> movable;
+    std::vector<Cell> starts, blocked;
+    std::vector<std::vector<Cell>> goals;
+    for (int i = 0; i < n; ++i) {
+      if (world.is_immovable(i)) {
+        blocked.push_back(world.positions[i]);
+        continue;
+      }
+      movable.push_back(i);
+      starts.push_back(world.positions[i]);
+      goals.push_back(world.goals[i].empty() ? std::vector<Cell>{world.positions[i]} : world.goals[i]);
+    }
     PbsConfig pc;
     pc.horizon = cfg_.H;
     pc.c_soft = 0;
     pc.time_limit_s = cfg_.timeout_s;
     pc.node_budget = cfg_.node_budget;
-    PbsResult r = solve_pbs(world.grid, world.dist, world.positions, goals, nullptr, pc);
+    pc.blocked_cells = blocked.empty() ? nullptr : &blocked;
+    PbsResult r = solve_pbs(world.grid, world.dist, starts, goals, nullptr, pc);
     ++solver_calls_;
     nodes_ += r.nodes;
     sipp_calls_ += r.sipp_calls;
@@ -53,7 +77,10 @@ StepReport RhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& nex
     report = {true, r.time_s};
     have_plan_ = r.success;
     if (r.success) {
-      plan_ = std::move(r.paths);
+      plan_.assign(n, {});
+      for (size_t k = 0; k < movable.size(); ++k) plan_[movable[k]] = std::move(r.paths[k]);
+      for (int i = 0; i < n; ++i)
+        if (world.is_immovable(i)) plan_[i].assign(cfg_.H + 1, world.positions[i]);
     } else {
       ++solver_failures_;
       if (r.timed_out) ++timeouts_;

@@ -35,7 +35,10 @@ class DeadlinePlanner {
   DeadlinePlanner& operator=(const DeadlinePlanner&) = delete;
 
   // Fills next like Planner::plan_step. deadline_s <= 0 waits for the primary without limit.
-  DeadlineOutcome step(const gdrhcr::WorldView& world, std::vector<gdrhcr::Cell>& next, double deadline_s);
+  // The world's vectors are copied for the worker; `keep_alive` is held until the primary's
+  // step ends, for what the world refers to that the caller may drop sooner (its DistTable).
+  DeadlineOutcome step(const gdrhcr::WorldView& world, std::vector<gdrhcr::Cell>& next, double deadline_s,
+                       std::shared_ptr<const void> keep_alive = nullptr);
 
   // The primary, for name/params/stats and introspection; only between steps, and only when
   // primary_idle() (a late step may still be running on the worker).

@@ -84,7 +84,9 @@ class Fleet {
 
   // Status transitions from the robots' cells (picked, delivered; tasks of robots that went
   // offline are requeued, also picked ones: the load on a dead robot is fetched again from the
-  // pickup), then greedy assignment of queued tasks to the nearest idle robots.
+  // pickup; an assigned task whose pickup an offline robot stands on goes back to the queue),
+  // then greedy assignment of queued tasks to the nearest idle robots. Tasks whose pickup or
+  // delivery an offline robot stands on wait in the queue until it leaves.
   void advance();
   // Goal sequences for the WorldView: to-pickup robots [pickup, delivery], to-delivery robots
   // [delivery], idle and offline robots [their cell].

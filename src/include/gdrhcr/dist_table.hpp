@@ -24,7 +24,8 @@ constexpr int kUnreachable = INT32_MAX / 4;
 // Distances from every cell to one goal (kUnreachable for obstacles and other components).
 class DistRow {
  public:
-  DistRow(const Grid& grid, Cell goal);
+  // `blocked` (per cell, optional): cells the BFS never enters, though it may start from one.
+  DistRow(const Grid& grid, Cell goal, const std::vector<uint8_t>* blocked = nullptr);
   int operator[](Cell c) const { return dist_[c]; }
   Cell goal() const { return goal_; }
   size_t bytes() const { return dist_.size() * sizeof(int32_t); }
@@ -38,6 +39,10 @@ class DistTable {
  public:
   static constexpr size_t kDefaultBudgetBytes = size_t(256) << 20;
   explicit DistTable(const Grid& grid, size_t budget_bytes = kDefaultBudgetBytes);
+  // Distances that route around `blocked` free cells, e.g. robots that went offline and now
+  // stand where they stopped: paths avoid them, and a goal on one is still accepted (the
+  // offline robot's own), but no other cell reaches it.
+  DistTable(const Grid& grid, const std::vector<Cell>& blocked, size_t budget_bytes = kDefaultBudgetBytes);
 
   // The row for `goal`, computing it on first use. Throws std::out_of_range for a blocked goal.
   std::shared_ptr<const DistRow> row(Cell goal) const;
@@ -56,6 +61,7 @@ class DistTable {
   void evict_locked() const;
 
   const Grid& grid_;
+  std::vector<uint8_t> blocked_;  // per cell; empty when nothing is blocked
   size_t budget_;
   mutable std::shared_mutex mutex_;
   mutable std::unordered_map<Cell, std::unique_ptr<Entry>> rows_;

@@ -91,6 +91,7 @@ class GdRhcrPlanner : public Planner {
   long next_plan_id_ = 1;
   int now_ = 0;  // the timestep of the last plan_step
   std::vector<GroupInfo> last_groups_;
+  std::vector<uint8_t> immovable_at_;  // per cell: an immovable agent stands there (this step)
   struct Arena;
   std::unique_ptr<Arena> arena_;
 

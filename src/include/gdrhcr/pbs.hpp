@@ -41,6 +41,8 @@ struct PbsConfig {
   double time_limit_s = 60.0;
   long node_budget = 0;       // 0 = unlimited
   bool backjump = true;       // skip siblings that cannot undo a dead end (see above)
+  // Cells no path may use at any time of the window (immovable agents outside the call).
+  const std::vector<Cell>* blocked_cells = nullptr;
 };
 
 struct PbsResult {

@@ -24,7 +24,12 @@ struct WorldView {
   int timestep;
   const std::vector<Cell>& positions;
   const std::vector<std::vector<Cell>>& goals;
+  // Agents that cannot move (robots gone offline), per agent; null = none. Planners keep them
+  // in place and plan around them; pair with a DistTable that blocks their cells, so distances
+  // route around them too.
+  const std::vector<uint8_t>* immovable = nullptr;
   int num_agents() const { return static_cast<int>(positions.size()); }
+  bool is_immovable(int i) const { return immovable && (*immovable)[i]; }
 };
 
 // A group of agents planned together in the last step, and the solver that moved it.
