@@ -158,6 +158,7 @@ class Soak(object):
         self.plan_times = []
         self.forced_waits = 0
         self.max_tasks_open = 0
+        self.busy = []
         self.max_offline = None  # PlannerStats.offline_robots, when the message has it
 
         # Tasks.
@@ -293,6 +294,7 @@ class Soak(object):
             self.plan_times.append(msg.plan_time)
             self.forced_waits += msg.forced_waits
             self.max_tasks_open = max(self.max_tasks_open, msg.tasks_queued + msg.tasks_active)
+            self.busy.append(msg.tasks_active)  # robots with a task (assigned or picked)
             off = getattr(msg, "offline_robots", None)
             if off is not None:
                 self.max_offline = max(self.max_offline or 0, off)
@@ -557,6 +559,8 @@ class Soak(object):
                 "finished_not_in_list_tasks": finished_unlisted,
                 "status_after_finished": self.status_after_finish,
                 "max_open_in_planner_stats": self.max_tasks_open,
+                "robots_busy_mean": round(sum(self.busy) / float(len(self.busy)), 1) if self.busy else None,
+                "robots_busy_median": pct(self.busy, 50) if self.busy else None,
                 "delivered_per_robot_step": (round(len(delivered) / float(self.robot_steps), 6)
                                              if self.robot_steps else None),
             },
