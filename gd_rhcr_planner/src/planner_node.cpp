@@ -153,7 +153,8 @@ class PlannerNode {
   std::deque<double> tick_stamps_;  // wall times of recent published ticks, for the rate
   double plan_time_sum_ = 0, plan_time_max_ = 0, step_time_max_ = 0;
   int plan_time_count_ = 0;
-  std::string last_problem_;
+  std::string last_problem_;  // the latest problem, kept after it is over (see its tick)
+  uint64_t last_problem_tick_ = 0;
 
   ros::Publisher commands_pub_, status_pub_, map_pub_, mapd_pub_, markers_pub_, stats_pub_,
       groups_pub_, diag_pub_;
@@ -430,6 +431,7 @@ void PlannerNode::publish_events_locked() {
     } catch (const std::exception& e) {
       ++store_errors_;
       last_problem_ = e.what();
+      last_problem_tick_ = tick_;
       ROS_ERROR_THROTTLE(2.0, "%s; tasks are kept in memory but will not survive a restart", e.what());
     }
   }
@@ -484,6 +486,7 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     if (!fleet_->all_reported()) {
       ++skipped_;
       last_problem_ = std::to_string(fleet_->missing_robots()) + " robots have not reported a state yet";
+      last_problem_tick_ = tick_;
       ROS_INFO_THROTTLE(5.0, "waiting: %s", last_problem_.c_str());
       return;
     }
@@ -491,6 +494,7 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     if (!conflict.empty()) {
       ++skipped_;
       last_problem_ = "robot states inconsistent: " + conflict;
+      last_problem_tick_ = tick_;
       ROS_ERROR_THROTTLE(2.0, "no step published: %s", last_problem_.c_str());
       return;
     }
@@ -577,12 +581,14 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     if (!outcome.primary_error.empty()) {
       ++planner_errors_;
       last_problem_ = "planner failed, PIBT moved the fleet: " + outcome.primary_error;
+      last_problem_tick_ = tick_;
       ROS_ERROR_THROTTLE(1.0, "%s", last_problem_.c_str());
     }
   }
   if (!plan_error.empty()) {
     ++invalid_plans_;
     last_problem_ = "planner step rejected, all robots wait: " + plan_error;
+    last_problem_tick_ = tick_;
     ROS_ERROR_THROTTLE(1.0, "%s", last_problem_.c_str());
   }
   cmds.commands.resize(pos.size());
@@ -809,9 +815,15 @@ void PlannerNode::on_diagnostics(const ros::TimerEvent&) {
   kv("skipped ticks", std::to_string(skipped_));
   kv("rejected plans", std::to_string(invalid_plans_));
   kv("ignored robot reports", std::to_string(bad_reports_));
+  // Memory that grows by design up to a bound: the distance rows (dist_budget_mb) and the
+  // finished tasks kept for list_tasks (the newest 10000).
+  kv("distance rows cached", std::to_string(dist_->cached_rows()));
+  kv("distance cache (MB)", std::to_string(dist_->cached_bytes() / 1048576.0));
+  kv("tasks known", std::to_string(fleet_->tasks().size()));
   kv("tasks delivered", std::to_string(fleet_->delivered_total()));
   kv("tasks failed", std::to_string(fleet_->failed_total()));
-  kv("last problem", last_problem_);
+  kv("last problem", last_problem_.empty() ? "none" : last_problem_);
+  kv("last problem at tick", std::to_string(last_problem_tick_));
   arr.status.push_back(s);
   diag_pub_.publish(arr);
 }
