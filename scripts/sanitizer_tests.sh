@@ -11,11 +11,13 @@ export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$top/t
 echo "--- ASan + UBSan build"
 cmake -S "$top" -B "$top/build-asan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGDRHCR_SANITIZE=address,undefined \
   -DCMAKE_CXX_FLAGS=-fno-sanitize-recover=undefined >/dev/null
-cmake --build "$top/build-asan" -j"$jobs" --target gdrhcr_core_tests gdrhcr_sim
+cmake --build "$top/build-asan" -j"$jobs" --target gdrhcr_core_tests gdrhcr_sim deadline_planner_tests
 "$top/build-asan/test/gdrhcr_core_tests" --gtest_brief=1
+"$top/build-asan/test/deadline_planner_tests" --gtest_brief=1
 
-echo "--- TSan build (parallel GD-RHCR and the shared distance table)"
+echo "--- TSan build (parallel GD-RHCR, the shared distance table, the node's DeadlinePlanner)"
 cmake -S "$top" -B "$top/build-tsan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGDRHCR_SANITIZE=thread >/dev/null
-cmake --build "$top/build-tsan" -j"$jobs" --target gdrhcr_core_tests
-"$top/build-tsan/test/gdrhcr_core_tests" --gtest_brief=1 --gtest_filter='GdRhcr*:DistTable*'
+cmake --build "$top/build-tsan" -j"$jobs" --target gdrhcr_core_tests deadline_planner_tests
+"$top/build-tsan/test/gdrhcr_core_tests" --gtest_brief=1 --gtest_filter='GdRhcr*:DistTable*:ImmovableAgents*'
+"$top/build-tsan/test/deadline_planner_tests" --gtest_brief=1
 echo "sanitizer tests: clean"
