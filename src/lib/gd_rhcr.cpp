@@ -182,7 +182,7 @@ void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
   }
   // Immovable agents (offline robots) are not planned: every path avoids their cells, theirs
   // and those of the other groups (hard, as they will not move whatever anyone plans).
-  std::vector<Cell> starts, blocked;
+  std::vector<Cell> starts;
   std::vector<std::vector<Cell>> goals;
   std::vector<int> planned;
   for (int i : agents) {
@@ -191,15 +191,12 @@ void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
     starts.push_back(world.positions[i]);
     goals.push_back(world.goals[i]);
   }
-  if (world.immovable)
-    for (int j = 0; j < world.num_agents(); ++j)
-      if ((*world.immovable)[j]) blocked.push_back(world.positions[j]);
   PbsConfig pc;
   pc.horizon = cfg_.H;
   pc.c_soft = cfg_.c_soft;
   pc.time_limit_s = cfg_.timeout_s;
   pc.node_budget = cfg_.node_budget;
-  pc.blocked_cells = blocked.empty() ? nullptr : &blocked;
+  pc.blocked_cells = immovable_cells_.empty() ? nullptr : &immovable_cells_;
   job.result = solve_pbs(grid_, world.dist, starts, goals, soft.empty() ? nullptr : &soft, pc);
   if (job.result.success && planned.size() != agents.size()) {  // back in group order
     std::vector<std::vector<Cell>> paths(agents.size());
@@ -295,11 +292,8 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
   const int t = world.timestep;
   now_ = t;
   partition_.compute(world.positions, cfg_.V);
-  if (world.immovable) {
-    immovable_at_.assign(grid_.num_cells(), 0);
-    for (int i = 0; i < n; ++i)
-      if ((*world.immovable)[i]) immovable_at_[world.positions[i]] = 1;
-  }
+  immovable_cells_ = world.immovable_cells();
+  immovable_at_ = world.immovable_cell_mask();
   const auto& groups = partition_.groups();
 
   last_groups_.assign(groups.size(), GroupInfo{});

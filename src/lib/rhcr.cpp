@@ -17,12 +17,7 @@ RhcrPlanner::RhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, RhcrCo
 
 bool RhcrPlanner::on_plan(const WorldView& world) const {
   const int k = world.timestep - plan_start_;
-  std::vector<uint8_t> immovable_at;
-  if (world.immovable) {
-    immovable_at.assign(world.grid.num_cells(), 0);
-    for (int i = 0; i < world.num_agents(); ++i)
-      if ((*world.immovable)[i]) immovable_at[world.positions[i]] = 1;
-  }
+  const std::vector<uint8_t> immovable_at = world.immovable_cell_mask();
   for (int i = 0; i < world.num_agents(); ++i) {
     const auto& p = plan_[i];
     if (!immovable_at.empty() && !world.is_immovable(i))
@@ -50,14 +45,12 @@ StepReport RhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& nex
     plan_start_ = world.timestep;
     // An agent without a known goal just keeps its cell (a one-goal sequence it already meets).
     // Immovable agents are not planned: their cells are blocked for everyone else.
+    const std::vector<Cell> blocked = world.immovable_cells();
     std::vector<int> movable;
-    std::vector<Cell> starts, blocked;
+    std::vector<Cell> starts;
     std::vector<std::vector<Cell>> goals;
     for (int i = 0; i < n; ++i) {
-      if (world.is_immovable(i)) {
-        blocked.push_back(world.positions[i]);
-        continue;
-      }
+      if (world.is_immovable(i)) continue;
       movable.push_back(i);
       starts.push_back(world.positions[i]);
       goals.push_back(world.goals[i].empty() ? std::vector<Cell>{world.positions[i]} : world.goals[i]);

@@ -91,7 +91,10 @@ class GdRhcrPlanner : public Planner {
   long next_plan_id_ = 1;
   int now_ = 0;  // the timestep of the last plan_step
   std::vector<GroupInfo> last_groups_;
-  std::vector<uint8_t> immovable_at_;  // per cell: an immovable agent stands there (this step)
+  // This step's immovable agents: their cells (blocked for every primary solve) and, per
+  // cell, whether one stands there. Written before the parallel phase, read during it.
+  std::vector<Cell> immovable_cells_;
+  std::vector<uint8_t> immovable_at_;
   struct Arena;
   std::unique_ptr<Arena> arena_;
 

@@ -30,6 +30,20 @@ struct WorldView {
   const std::vector<uint8_t>* immovable = nullptr;
   int num_agents() const { return static_cast<int>(positions.size()); }
   bool is_immovable(int i) const { return immovable && (*immovable)[i]; }
+  // The cells of the immovable agents, and the same as a per-cell mask (empty when none).
+  std::vector<Cell> immovable_cells() const {
+    std::vector<Cell> cells;
+    for (int i = 0; immovable && i < num_agents(); ++i)
+      if ((*immovable)[i]) cells.push_back(positions[i]);
+    return cells;
+  }
+  std::vector<uint8_t> immovable_cell_mask() const {
+    std::vector<uint8_t> mask;
+    if (!immovable) return mask;
+    mask.assign(grid.num_cells(), 0);
+    for (Cell c : immovable_cells()) mask[c] = 1;
+    return mask;
+  }
 };
 
 // A group of agents planned together in the last step, and the solver that moved it.
