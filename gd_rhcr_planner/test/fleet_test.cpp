@@ -1,26 +1,13 @@
 // Fleet bookkeeping: task validation, assignment, status transitions, goals, the hold cascade.
 #include <gtest/gtest.h>
 
+#include "fleet_fixtures.hpp"
 #include "gd_rhcr_planner/fleet.hpp"
 #include "gdrhcr/validator.hpp"
 
 using namespace gd_rhcr_planner;
+using namespace gd_rhcr_planner::fixtures;
 using gdrhcr::Grid;
-
-namespace {
-Grid corridor() {
-  return Grid::from_rows({
-      "..........",
-      ".@@@@@@@@.",
-      "..........",
-  });
-}
-std::string report(Fleet& f, int id, int x, int y, bool offline = false) {
-  std::string err;
-  f.update_robot(id, x, y, offline, false, err);
-  return err;
-}
-}  // namespace
 
 TEST(Fleet, RejectsBadTasksWithReasons) {
   Grid g = corridor();

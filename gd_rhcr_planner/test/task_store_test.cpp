@@ -8,23 +8,14 @@
 
 #include <unistd.h>
 
+#include "fleet_fixtures.hpp"
 #include "gd_rhcr_planner/task_store.hpp"
 
 using namespace gd_rhcr_planner;
+using namespace gd_rhcr_planner::fixtures;
 using gdrhcr::Grid;
 
 namespace {
-Grid corridor() {
-  return Grid::from_rows({
-      "..........",
-      ".@@@@@@@@.",
-      "..........",
-  });
-}
-void report(Fleet& f, int id, int x, int y) {
-  std::string err;
-  ASSERT_TRUE(f.update_robot(id, x, y, false, false, err)) << err;
-}
 struct TempDir {
   std::filesystem::path dir;
   TempDir() {
@@ -48,15 +39,15 @@ TEST(TaskStore, TasksSurviveARestartWithTheirRobots) {
     Fleet f(g, d, 3);
     TaskStore store(tmp.file());  // creates the directory
     EXPECT_TRUE(store.loaded().open.empty());
-    report(f, 0, 0, 0);
-    report(f, 1, 9, 0);
-    report(f, 2, 0, 2);
+    ASSERT_EQ(report(f, 0, 0, 0), "");
+    ASSERT_EQ(report(f, 1, 9, 0), "");
+    ASSERT_EQ(report(f, 2, 0, 2), "");
     done_id = f.submit(0, 2, 3, 2, 9).task_id;     // robot 2 stands on its pickup
     picked_id = f.submit(9, 0, 0, 2, 5).task_id;   // robot 1 stands on its pickup
     assigned_id = f.submit(5, 0, 9, 2, 4).task_id;  // robot 0, on its way
     f.advance();
     flush(f, store);
-    report(f, 2, 3, 2);  // delivers
+    ASSERT_EQ(report(f, 2, 3, 2), "");  // delivers
     f.advance();
     queued_id = f.submit(4, 2, 0, 0, 0).task_id;  // robot 2 is idle again: gets it
     std::string reason;
@@ -84,9 +75,9 @@ TEST(TaskStore, TasksSurviveARestartWithTheirRobots) {
   EXPECT_EQ(f.task(queued_id)->robot, 2);
   EXPECT_EQ(f.task(done_id), nullptr);
   // Robots resume: robot 1 reaches the delivery of the task it carried.
-  report(f, 0, 5, 0);
-  report(f, 1, 0, 2);
-  report(f, 2, 4, 2);
+  ASSERT_EQ(report(f, 0, 5, 0), "");
+  ASSERT_EQ(report(f, 1, 0, 2), "");
+  ASSERT_EQ(report(f, 2, 4, 2), "");
   f.advance();
   EXPECT_EQ(f.task(picked_id)->state, kDelivered);
   EXPECT_EQ(f.task(assigned_id)->state, kPicked);
@@ -118,7 +109,7 @@ TEST(TaskStore, CompactionKeepsTheJournalBoundedAndReadable) {
   TempDir tmp;
   Fleet f(g, d, 1);
   TaskStore store(tmp.file());
-  report(f, 0, 0, 0);
+  ASSERT_EQ(report(f, 0, 0, 0), "");
   std::string reason;
   for (int i = 0; i < 3000; ++i) {  // 2 records per task: the journal must compact
     const auto id = f.submit(1, 0, 2, 0, 0).task_id;
