@@ -7,7 +7,7 @@
 # Afterwards: source .ws/devel/setup.bash (not under `set -u`).
 set -eo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
-ws="$top/.ws"
+ws="${GDRHCR_WS:-$top/.ws}"  # GDRHCR_WS: another workspace (parallel work in one checkout)
 export PATH=/usr/bin:$PATH                     # pitfall 1: Debian's python3 first
 export ROS_HOME="$ws/.ros_home" ROS_IP=127.0.0.1 ROS_MASTER_URI=${ROS_MASTER_URI:-http://127.0.0.1:11311}
 jobs=${ROS_BUILD_JOBS:-2}

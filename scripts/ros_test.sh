@@ -6,7 +6,7 @@
 #   bash scripts/ros_test.sh
 set -o pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
-ws="$top/.ws"
+ws="${GDRHCR_WS:-$top/.ws}"  # GDRHCR_WS: another workspace (parallel work in one checkout)
 export PATH=/usr/bin:$PATH
 export ROS_HOME="$ws/.ros_home" ROS_IP=127.0.0.1
 bash "$top/scripts/ros_build.sh" || { echo "ros_test: build failed"; exit 1; }
