@@ -2,13 +2,14 @@
 # Installs what gd_rhcr needs from Debian 12's archive (run as root; no-op when all present).
 # Core: compiler, CMake, GoogleTest, oneTBB, nlohmann-json. ROS 1 from Debian (see
 # ../shared/ROS_ON_DEBIAN.md): catkin, roscpp, messages, actionlib, tf2, rostest, roslaunch.
-# Tools: matplotlib for plots; clang and its libFuzzer runtime for scripts/fuzz.sh. Extra
-# packages listed in scripts/ros_deps.txt are added too.
+# Tools: matplotlib for plots; Dask distributed, the sweep backend of tools/gdrhcr_sweep.py;
+# clang and its libFuzzer runtime for scripts/fuzz.sh. Extra packages listed in
+# scripts/ros_deps.txt are added too.
 set -eo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 pkgs=(
   build-essential cmake libgtest-dev googletest libgmock-dev libtbb-dev nlohmann-json3-dev
-  libyaml-cpp-dev python3-matplotlib python3-numpy python3-yaml
+  libyaml-cpp-dev python3-matplotlib python3-numpy python3-yaml python3-distributed python3-dask
   clang libclang-rt-14-dev
   catkin ros-message-generation ros-message-runtime libroscpp-dev python3-rospy
   ros-std-msgs libstd-msgs-dev python3-std-msgs
