@@ -208,6 +208,7 @@ void Fleet::advance() {
       rob.task = -1;
     }
   }
+  if (!auto_assign_) return;  // an outside dispatcher assigns (apply_assignments)
   // Greedy assignment: queued tasks by priority (high first) then id, each to the nearest idle
   // online robot (shortest path distance to the pickup; ties to the lower robot id).
   std::vector<int> idle;
@@ -234,6 +235,49 @@ void Fleet::advance() {
     set_state(*t, kAssigned, r, "");
     if (robots_[r].cell == t->pickup) set_state(*t, kPicked, r, "");
   }
+}
+
+std::vector<std::string> Fleet::apply_assignments(const std::vector<Reassignment>& batch) {
+  std::vector<std::string> refused;
+  std::vector<std::pair<TaskRecord*, int>> moves;  // task, its robot before the batch
+  for (const Reassignment& a : batch) {
+    auto it = tasks_.find(a.task);
+    const std::string what = "task " + std::to_string(a.task);
+    if (it == tasks_.end() || !(it->second.state == kQueued || it->second.state == kAssigned)) {
+      refused.push_back(what + " is not queued or waiting for its pickup");
+      continue;
+    }
+    if (a.robot >= num_robots()) {
+      refused.push_back(what + ": unknown robot " + std::to_string(a.robot));
+      continue;
+    }
+    TaskRecord& t = it->second;
+    const int before = t.state == kAssigned ? t.robot : -1;
+    if (before >= 0 && robots_[before].task == static_cast<int64_t>(t.id)) robots_[before].task = -1;
+    moves.emplace_back(&t, before);
+  }
+  for (size_t i = 0; i < moves.size(); ++i) {
+    TaskRecord& t = *moves[i].first;
+    const int before = moves[i].second;
+    int r = -1;
+    for (const Reassignment& a : batch)
+      if (a.task == t.id) r = a.robot;
+    const bool fits = r >= 0 && robots_[r].reported && !robots_[r].offline && robots_[r].task < 0;
+    if (r >= 0 && !fits) refused.push_back("task " + std::to_string(t.id) + ": robot " + std::to_string(r) + " is not free");
+    if (r >= 0 && !fits) r = before >= 0 && robots_[before].task < 0 && !robots_[before].offline ? before : -1;
+    if (r == before && r >= 0) {  // stays where it was
+      robots_[r].task = static_cast<int64_t>(t.id);
+      continue;
+    }
+    if (r < 0) {
+      if (before >= 0) set_state(t, kQueued, -1, "moved off robot " + std::to_string(before) + "; waiting for a nearer robot");
+      continue;
+    }
+    robots_[r].task = static_cast<int64_t>(t.id);
+    set_state(t, kAssigned, r, before >= 0 ? "reassigned from robot " + std::to_string(before) : "");
+    if (robots_[r].cell == t.pickup) set_state(t, kPicked, r, "");
+  }
+  return refused;
 }
 
 uint8_t Fleet::mode(int r) const {

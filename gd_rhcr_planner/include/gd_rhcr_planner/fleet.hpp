@@ -88,6 +88,18 @@ class Fleet {
   // then greedy assignment of queued tasks to the nearest idle robots. Tasks whose pickup or
   // delivery an offline robot stands on wait in the queue until it leaves.
   void advance();
+  // Assignment by an outside dispatcher (dispatcher.hpp): with auto-assign off, advance() makes
+  // the transitions only and leaves queued tasks to apply_assignments().
+  void set_auto_assign(bool on) { auto_assign_ = on; }
+  bool auto_assign() const { return auto_assign_; }
+  struct Reassignment {
+    uint64_t task;
+    int robot;  // -1: back to the queue
+  };
+  // Applies a batch at once: each listed task (queued, or assigned and not picked) leaves its
+  // robot, then goes to `robot` (online, and holding no task after the batch) or to the queue,
+  // with one event each. Entries that do not fit are skipped; returns their reasons.
+  std::vector<std::string> apply_assignments(const std::vector<Reassignment>& batch);
   // Goal sequences for the WorldView: to-pickup robots [pickup, delivery], to-delivery robots
   // [delivery], idle and offline robots [their cell].
   void fill_goals(std::vector<std::vector<Cell>>& goals) const;
@@ -131,6 +143,7 @@ class Fleet {
   uint64_t next_id_ = 1;
   uint64_t delivered_ = 0, failed_ = 0;
   size_t finished_limit_ = 10000;
+  bool auto_assign_ = true;
 };
 
 // The safety cascade: robots with held[i] set stay where they are, and so does every robot
