@@ -69,6 +69,7 @@ class SweepTest(unittest.TestCase):
             self.assertEqual(r["status"], "ok")
             self.assertEqual(r["collisions"], "0")
             self.assertGreater(float(r["throughput"]), 0)
+            self.assertIn(r["worker"], {"local-0", "local-1"})  # the local cluster's --jobs 2 workers
         # A second run has nothing left to do and adds nothing.
         self.assertEqual(self.sweep(), 0)
         self.assertEqual(len(rows_of(self.csv)), 12)
@@ -100,6 +101,38 @@ class SweepTest(unittest.TestCase):
         rows = rows_of(self.csv)
         self.assertEqual(len(rows), 12)
         self.assertEqual(len({gdrhcr_sweep.run_key(r) for r in rows}), 12)
+
+    def test_csv_without_worker_column_is_resumed(self):
+        # A CSV written before the worker and host columns existed: its finished rows count.
+        self.assertEqual(self.sweep("--limit", "4"), 0)
+        old = [f for f in gdrhcr_sweep.FIELDS if f not in ("worker", "host")]
+        rows = rows_of(self.csv)
+        with open(self.csv, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=old, extrasaction="ignore")
+            w.writeheader()
+            w.writerows(rows)
+        self.assertEqual(self.sweep(), 0)
+        rows = rows_of(self.csv)
+        self.assertEqual(len(rows), 12)
+        self.assertEqual(len({gdrhcr_sweep.run_key(r) for r in rows}), 12)
+        self.assertEqual(sum(1 for r in rows if r["worker"] == ""), 4)  # the 4 old rows kept, not redone
+
+    def test_foreign_csv_is_refused(self):
+        os.makedirs(os.path.dirname(self.csv))
+        with open(self.csv, "w") as f:
+            f.write("a,b\n1,2\n")
+        self.assertEqual(self.sweep(), 2)
+        with open(self.csv) as f:
+            self.assertEqual(f.read(), "a,b\n1,2\n")  # untouched
+
+    def test_planner_agent_counts(self):
+        cfg = {"seeds": 1, "experiments": [
+            {"map": "m", "agents": [10, 20, 30], "planners": [
+                {"label": "A", "planner": "pibt"}, {"label": "B", "planner": "rhcr", "agents": [10]}]}]}
+        runs = gdrhcr_sweep.expand(cfg)
+        self.assertEqual(sorted((r["label"], r["agents"]) for r in runs),
+                         [("A", 10), ("A", 20), ("A", 30), ("B", 10)])
+        self.assertNotIn("agents", runs[-1]["options"])
 
     def test_bad_config_and_missing_simulator(self):
         with open(self.cfg, "w") as f:
