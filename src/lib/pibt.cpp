@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <numeric>
 
 #include "gdrhcr/task_stream.hpp"
@@ -13,25 +14,44 @@ constexpr int kFree = -1;
 constexpr int kFixed = -2;  // a cell held by an agent PIBT does not move this call
 }  // namespace
 
-PibtStep::PibtStep(const Grid& grid, int num_agents, uint64_t seed)
+PibtStep::PibtStep(const Grid& grid, int num_agents, uint64_t seed, PibtOptions options)
     : grid_(grid),
+      opt_(options),
       rng_(mix_seed(seed, 0x50494254ULL)),
       priority_(num_agents),
+      last_goal_(num_agents, kNoCell),
       occupied_now_(grid.num_cells(), kFree),
       occupied_next_(grid.num_cells(), kFree),
-      rows_(num_agents) {
+      rows_(num_agents),
+      goal_of_(num_agents, kNoCell) {
   std::uniform_real_distribution<double> tie(0.0, 1.0);
   for (auto& p : priority_) p = tie(rng_);
 }
 
+// Priority = time since the agent last reached a goal, plus its fixed tie-breaker in [0, 1).
+// Reaching a goal shows as standing on it, or (lifelong runs, where the next goal is handed out
+// before the next call) as the goal having changed since the agent's last update.
+void PibtStep::update_priority(const WorldView& world, int i, Cell goal) {
+  const bool reached = world.positions[i] == goal ||
+                       (opt_.priority_reset && last_goal_[i] != kNoCell && last_goal_[i] != goal);
+  if (reached) priority_[i] -= std::floor(priority_[i]);
+  else priority_[i] += 1.0;
+  last_goal_[i] = goal;
+}
+
 void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::vector<int>& agents,
-                    const std::vector<std::pair<Cell, Cell>>& fixed_moves) {
+                    const std::vector<std::pair<Cell, Cell>>& fixed_moves,
+                    const std::vector<Cell>* preferred) {
   const int n = world.num_agents();
   if (static_cast<int>(priority_.size()) < n) {
     std::uniform_real_distribution<double> tie(0.0, 1.0);
     while (static_cast<int>(priority_.size()) < n) priority_.push_back(tie(rng_));
     rows_.resize(n);
+    goal_of_.resize(n, kNoCell);
+    last_goal_.resize(n, kNoCell);
   }
+  preferred_ = preferred;
+  immovable_ = world.immovable;
   order_.clear();
   if (agents.empty()) {
     order_.resize(n);
@@ -41,10 +61,8 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   }
   for (int i : order_) {
     const Cell g = world.goals[i].empty() ? world.positions[i] : world.goals[i][0];
-    // Priority: time since the last goal, so long-waiting agents win; the fractional part is a
-    // fixed tie-breaker. An agent standing on its goal drops back to the tie-breaker alone.
-    if (world.positions[i] == g) priority_[i] -= std::floor(priority_[i]);
-    else priority_[i] += 1.0;
+    update_priority(world, i, g);
+    goal_of_[i] = g;
     rows_[i] = world.dist.row(g);
     occupied_now_[world.positions[i]] = i;
     next[i] = kNoCell;
@@ -73,30 +91,56 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
     if (from != kNoCell) occupied_next_[from] = kFree;
     if (to != kNoCell) occupied_next_[to] = kFree;
   }
+  preferred_ = nullptr;
+  immovable_ = nullptr;
+}
+
+// Candidates: the neighbours and staying put, the preferred cell first, then nearest to the
+// goal; among equals (tie_break kFreeFirst) a cell nobody stands on, then a random order.
+void PibtStep::order_candidates(const WorldView& world, int ai, Cell* cand, int m) {
+  const DistRow& row = *rows_[ai];
+  const Cell pref = preferred_ ? (*preferred_)[ai] : kNoCell;
+  std::shuffle(cand, cand + m, rng_);
+  const bool free_first = opt_.tie_break == PibtOptions::TieBreak::kFreeFirst;
+  std::stable_sort(cand, cand + m, [&](Cell a, Cell b) {
+    if ((a == pref) != (b == pref)) return a == pref;
+    if (row[a] != row[b]) return row[a] < row[b];
+    if (!free_first) return false;
+    return (occupied_now_[a] == kFree) > (occupied_now_[b] == kFree);
+  });
+  (void)world;
 }
 
 bool PibtStep::push(const WorldView& world, int ai, int aj, std::vector<Cell>& next) {
   const Cell here = world.positions[ai];
-  const DistRow& row = *rows_[ai];
-  // Candidates: the neighbours and staying put, nearest to the goal first; among equals prefer
-  // a cell nobody stands on (fewer pushes), then a random order (rng) to break symmetry.
   Cell cand[5];
   int m = 0;
   for (Cell c : grid_.neighbours(here)) cand[m++] = c;
   cand[m++] = here;
-  std::shuffle(cand, cand + m, rng_);
-  std::stable_sort(cand, cand + m, [&](Cell a, Cell b) {
-    if (row[a] != row[b]) return row[a] < row[b];
-    return (occupied_now_[a] == kFree) > (occupied_now_[b] == kFree);
-  });
+  order_candidates(world, ai, cand, m);
+  // Swap: the agent on the best cell must get past this one; walk away and pull it along.
+  int partner = -1;
+  if (opt_.swap) {
+    partner = swap_partner(world, ai, cand[0]);
+    if (partner >= 0 && next[partner] != kNoCell) partner = -1;
+    if (partner >= 0) std::reverse(cand, cand + m);
+  }
   for (int k = 0; k < m; ++k) {
     const Cell u = cand[k];
     if (occupied_next_[u] != kFree) continue;
-    if (aj >= 0 && u == world.positions[aj]) continue;  // would swap with the pusher
     const int ak = occupied_now_[u];
+    // Never swap cells with an agent already moving into ours (the pusher included).
+    if (ak >= 0 && ak != ai && (ak == aj || next[ak] == here)) continue;
     occupied_next_[u] = ai;
     next[ai] = u;
     if (ak >= 0 && ak != ai && next[ak] == kNoCell && !push(world, ak, ai, next)) continue;
+    // Pull the swap partner into the cell we leave.
+    if (partner >= 0 && k == 0 && u != here && next[partner] == kNoCell &&
+        occupied_next_[here] == kFree && world.positions[partner] != u) {
+      occupied_next_[here] = partner;
+      next[partner] = here;
+      ++swaps_;
+    }
     return true;
   }
   occupied_next_[here] = ai;
@@ -104,12 +148,124 @@ bool PibtStep::push(const WorldView& world, int ai, int aj, std::vector<Cell>& n
   return false;
 }
 
-PibtPlanner::PibtPlanner(const Grid& grid, int num_agents, uint64_t seed)
-    : seed_(seed), pibt_(grid, num_agents, seed) {}
+// Cells next to `at` an agent could step aside into, other than `except` (where the other agent
+// comes from): not held by an agent outside this call, an immovable agent, or an agent resting
+// on its goal at the end of a dead end. Returns their count; *other is one of them.
+int PibtStep::passable_neighbours(Cell at, Cell except, Cell* other) const {
+  int count = 0;
+  for (Cell u : grid_.neighbours(at)) {
+    if (u == except || occupied_next_[u] == kFixed) continue;
+    const int a = occupied_now_[u];
+    if (a >= 0) {
+      const auto nb = grid_.neighbours(u);
+      if (nb.end() - nb.begin() == 1 && goal_of_[a] == u) continue;
+      if (immovable_ && (*immovable_)[a]) continue;
+    }
+    ++count;
+    *other = u;
+  }
+  return count;
+}
+
+// Does the pusher (at pusher_at, heading through puller_at) need to swap with the puller? Walk
+// ahead of the pusher while it keeps approaching its goal in a corridor: a junction ahead means
+// plain pushing can clear the way; otherwise a swap is needed when the puller wants to come
+// towards the pusher's side and the pusher wants to go the other way.
+bool PibtStep::needs_swap(Cell pusher_at, Cell puller_at, const DistRow& pusher_row,
+                          const DistRow& puller_row) const {
+  Cell a = pusher_at, b = puller_at;
+  for (int guard = 0; pusher_row[b] < pusher_row[a] && guard < grid_.num_cells(); ++guard) {
+    Cell ahead = kNoCell;
+    const int room = passable_neighbours(b, a, &ahead);
+    if (room >= 2) return false;  // a junction ahead: pushing works
+    if (room == 0) break;         // a dead end
+    a = b;
+    b = ahead;
+  }
+  return puller_row[a] < puller_row[b] && (pusher_row[a] == 0 || pusher_row[b] < pusher_row[a]);
+}
+
+// Can the pusher pull the puller behind it until they reach a junction where they pass? Walk
+// backwards from the puller (the agent that retreats) through the corridor behind it.
+bool PibtStep::can_swap(Cell pusher_at, Cell puller_at) const {
+  const Cell origin = pusher_at;
+  Cell a = pusher_at, b = puller_at;
+  for (int guard = 0; b != origin && guard < grid_.num_cells(); ++guard) {
+    Cell behind = kNoCell;
+    const int room = passable_neighbours(b, a, &behind);
+    if (room >= 2) return true;
+    if (room == 0) return false;
+    a = b;
+    b = behind;
+  }
+  return false;
+}
+
+// The agent to pull along when `ai` retreats, or -1. Case 1: the agent on ai's best cell must get
+// past ai. Case 2 (clearing): a neighbour behind ai must get past it into the corridor ai enters.
+int PibtStep::swap_partner(const WorldView& world, int ai, Cell best) const {
+  const Cell here = world.positions[ai];
+  if (best == here) return -1;
+  const int aj = occupied_now_[best];
+  if (aj >= 0 && aj != ai && !world.is_immovable(aj) &&
+      needs_swap(here, best, *rows_[ai], *rows_[aj]) && can_swap(best, here))
+    return aj;
+  for (Cell u : grid_.neighbours(here)) {
+    const int ak = occupied_now_[u];
+    if (ak < 0 || ak == ai || u == best || world.is_immovable(ak)) continue;
+    if (needs_swap(here, best, *rows_[ak], *rows_[ai]) && can_swap(best, here)) return ak;
+  }
+  return -1;
+}
+
+PibtPlanner::PibtPlanner(const Grid& grid, int num_agents, uint64_t seed, PibtOptions options,
+                         const LocalGuidanceConfig* guidance)
+    : seed_(seed), pibt_(grid, num_agents, seed, options) {
+  if (guidance) guidance_ = std::make_unique<LocalGuidance>(grid, num_agents, *guidance);
+}
+
+nlohmann::json PibtPlanner::params() const {
+  const auto& o = pibt_.options();
+  nlohmann::json p = {{"seed", seed_},
+                      {"priority_reset", o.priority_reset},
+                      {"swap", o.swap},
+                      {"tie_break", o.tie_break == PibtOptions::TieBreak::kFreeFirst ? "free-first" : "random"},
+                      {"guidance", guidance_ ? "local" : "none"}};
+  if (guidance_) {
+    p["lg_window"] = guidance_->config().window;
+    p["lg_cost"] = guidance_->config().collision_cost;
+    p["lg_lazy"] = guidance_->config().lazy;
+  }
+  return p;
+}
+
+nlohmann::json PibtPlanner::stats() const {
+  nlohmann::json s = {{"swaps", pibt_.swaps()}};
+  if (guidance_) s["guidance_searches"] = guidance_->searches(), s["guidance_expansions"] = guidance_->expansions();
+  return s;
+}
+
+std::vector<Cell> PibtPlanner::planned_path(int agent) const {
+  return guidance_ ? guidance_->path_from(agent, now_) : std::vector<Cell>{};
+}
 
 StepReport PibtPlanner::plan_step(const WorldView& world, std::vector<Cell>& next) {
   const auto t0 = std::chrono::steady_clock::now();
-  pibt_.step(world, next);
+  now_ = world.timestep;
+  if (guidance_) {
+    const int n = world.num_agents();
+    order_.resize(n);
+    std::iota(order_.begin(), order_.end(), 0);
+    // Higher-priority agents plan their guidance first, so theirs is the least disturbed.
+    std::stable_sort(order_.begin(), order_.end(),
+                     [&](int a, int b) { return pibt_.priority(a) > pibt_.priority(b); });
+    guidance_->update(world, order_);
+    preferred_.resize(n);
+    for (int i = 0; i < n; ++i) preferred_[i] = guidance_->next_cell(i, now_, world.positions[i]);
+    pibt_.step(world, next, {}, {}, &preferred_);
+  } else {
+    pibt_.step(world, next);
+  }
   return {true, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()};
 }
 

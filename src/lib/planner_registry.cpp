@@ -10,11 +10,36 @@
 namespace gdrhcr {
 namespace {
 
+// PIBT's techniques, each switchable for ablations (all on by default).
+PibtOptions pibt_options(Params& p) {
+  PibtOptions o;
+  o.priority_reset = p.get_int("priority-reset", 1, 0, 1) == 1;
+  o.swap = p.get_int("swap", 1, 0, 1) == 1;
+  o.tie_break = p.get_choice("tie-break", "free-first", {"free-first", "random"}) == "random"
+                    ? PibtOptions::TieBreak::kRandom
+                    : PibtOptions::TieBreak::kFreeFirst;
+  return o;
+}
+
+LocalGuidanceConfig guidance_config(Params& p) {
+  LocalGuidanceConfig c;
+  c.window = p.get_int("lg-window", c.window, 1, 1000);
+  c.collision_cost = p.get_double("lg-cost", c.collision_cost, 0.0, 1e6);
+  c.lazy = p.get_int("lg-lazy", 1, 0, 1) == 1;
+  c.recheck = p.get_int("lg-recheck", c.recheck, 0, 1000);
+  return c;
+}
+
 const std::vector<std::pair<std::string, PlannerFactory>>& registry() {
   static const std::vector<std::pair<std::string, PlannerFactory>> planners = {
       {"pibt",
-       [](Params&, const Grid& grid, int n, uint64_t seed) -> std::unique_ptr<Planner> {
-         return std::make_unique<PibtPlanner>(grid, n, seed);
+       [](Params& p, const Grid& grid, int n, uint64_t seed) -> std::unique_ptr<Planner> {
+         const PibtOptions o = pibt_options(p);
+         if (p.get_choice("guidance", "none", {"none", "local"}) == "local") {
+           const LocalGuidanceConfig lg = guidance_config(p);
+           return std::make_unique<PibtPlanner>(grid, n, seed, o, &lg);
+         }
+         return std::make_unique<PibtPlanner>(grid, n, seed, o);
        }},
       {"rhcr",
        [](Params& p, const Grid& grid, int n, uint64_t seed) -> std::unique_ptr<Planner> {

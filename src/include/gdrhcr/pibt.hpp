@@ -1,56 +1,102 @@
 // PIBT: Priority Inheritance with Backtracking for lifelong MAPF.
 // Okumura, Machida, Défago, Tamura, "Priority Inheritance with Backtracking for Iterative
 // Multi-agent Path Finding", Artificial Intelligence 310, 2022 (IJCAI 2019).
+// Swap emulation after Okumura, "Engineering LaCAM*: Towards Real-Time, Large-Scale, and
+// Near-Optimal Multi-Agent Pathfinding", AAMAS 2024 (section "PIBT with swap").
 //
 // One timestep at a time: agents decide in priority order; an agent that wants a cell held by an
 // undecided agent lends it its priority, and that agent must move away or the request
-// backtracks. Priorities rise with the time since an agent last reached its goal, so nobody
+// backtracks. Priorities rise with the time since an agent last reached a goal, so nobody
 // starves. Never produces a vertex or edge collision.
+//
+// Swap: in a corridor two agents heading for each other's side deadlock under plain PIBT (the
+// pusher can only shove the other back). When the cell an agent wants is held by an agent that
+// needs to get past it, and a junction where they can pass is reachable, the agent walks away
+// from its goal and pulls the other one after it, until they reach the junction and pass.
 #pragma once
 
 #include <random>
 #include <vector>
 
+#include "gdrhcr/local_guidance.hpp"
 #include "gdrhcr/planner.hpp"
 
 namespace gdrhcr {
 
+struct PibtOptions {
+  // Reset an agent's priority when it reaches a goal (detected as its goal changing between
+  // calls, since the simulator and the node hand out the next goal before the next call).
+  bool priority_reset = true;
+  bool swap = true;  // LaCAM*'s swap emulation
+  // Order among equally near cells: kFreeFirst prefers a cell nobody stands on (fewer pushes),
+  // then random; kRandom is random alone (plain PIBT).
+  enum class TieBreak { kRandom, kFreeFirst };
+  TieBreak tie_break = TieBreak::kFreeFirst;
+};
+
 // The step function, reusable on a subset of agents (GD-RHCR moves large groups with it).
 class PibtStep {
  public:
-  PibtStep(const Grid& grid, int num_agents, uint64_t seed);
+  PibtStep(const Grid& grid, int num_agents, uint64_t seed, PibtOptions options = {});
 
   // Decides next[i] for every agent in `agents` (all agents when empty). `fixed_moves` holds the
   // (from, to) cells of agents outside `agents` whose moves are already decided; PIBT keeps its
   // agents out of both cells. The caller must not fix a move into a cell where one of `agents`
-  // stands (PIBT may need to keep that agent in place). Priorities: an agent on its goal drops
-  // to its tie-breaker, the others' rise by one.
+  // stands (PIBT may need to keep that agent in place). `preferred` (per agent, optional; kNoCell
+  // for none) is a cell an agent tries first whatever its distance, e.g. the next cell of a
+  // guidance path; it must be the agent's cell or a neighbour.
   void step(const WorldView& world, std::vector<Cell>& next,
             const std::vector<int>& agents = {},
-            const std::vector<std::pair<Cell, Cell>>& fixed_moves = {});
+            const std::vector<std::pair<Cell, Cell>>& fixed_moves = {},
+            const std::vector<Cell>* preferred = nullptr);
+
+  // Agent i's current priority (larger goes first), for tests and diagnostics.
+  double priority(int i) const { return priority_[i]; }
+  const PibtOptions& options() const { return opt_; }
+  long swaps() const { return swaps_; }
 
  private:
   bool push(const WorldView& world, int ai, int aj, std::vector<Cell>& next);
+  void order_candidates(const WorldView& world, int ai, Cell* cand, int m);
+  int swap_partner(const WorldView& world, int ai, Cell best) const;
+  bool needs_swap(Cell pusher_at, Cell puller_at, const DistRow& pusher_row,
+                  const DistRow& puller_row) const;
+  bool can_swap(Cell pusher_at, Cell puller_at) const;
+  int passable_neighbours(Cell at, Cell except, Cell* other) const;
+  void update_priority(const WorldView& world, int i, Cell goal);
 
   const Grid& grid_;
+  PibtOptions opt_;
   std::mt19937_64 rng_;
   std::vector<double> priority_;           // elapsed steps + a per-agent tie-breaker in [0,1)
+  std::vector<Cell> last_goal_;            // each agent's goal at its last update
   std::vector<int> occupied_now_, occupied_next_;  // agent per cell; -1 free, -2 held by a fixed move
   std::vector<std::shared_ptr<const DistRow>> rows_;  // each agent's goal row, this step
+  std::vector<Cell> goal_of_;                         // each agent's goal, this step
+  const std::vector<Cell>* preferred_ = nullptr;
+  const std::vector<uint8_t>* immovable_ = nullptr;
   std::vector<int> order_;
-  std::vector<Cell> candidates_scratch_;
+  long swaps_ = 0;
 };
 
+// PIBT over all agents, optionally following local guidance paths (local_guidance.hpp).
 class PibtPlanner : public Planner {
  public:
-  PibtPlanner(const Grid& grid, int num_agents, uint64_t seed);
+  PibtPlanner(const Grid& grid, int num_agents, uint64_t seed, PibtOptions options = {},
+              const LocalGuidanceConfig* guidance = nullptr);
   std::string name() const override { return "pibt"; }
   StepReport plan_step(const WorldView& world, std::vector<Cell>& next) override;
-  nlohmann::json params() const override { return {{"seed", seed_}}; }
+  nlohmann::json params() const override;
+  nlohmann::json stats() const override;
+  std::vector<Cell> planned_path(int agent) const override;
 
  private:
   uint64_t seed_;
   PibtStep pibt_;
+  std::unique_ptr<LocalGuidance> guidance_;
+  std::vector<int> order_;
+  std::vector<Cell> preferred_;
+  int now_ = 0;
 };
 
 }  // namespace gdrhcr

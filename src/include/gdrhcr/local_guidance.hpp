@@ -1,0 +1,82 @@
+// Local guidance: short spatio-temporal paths planned with collision costs, which PIBT follows.
+// Idea after Arita & Okumura, "Lifelong LaCAM with Local Guidance" (SoCS 2026): every agent
+// gets a path over the next W timesteps from a space-time A* whose cost is time plus a penalty
+// for every step that runs into another agent's guidance path (a vertex or a swap), and whose
+// heuristic is the shortest-path distance to the goal. PIBT then tries each agent's next
+// guidance cell first, so agents spread over parallel aisles and queue instead of meeting
+// head-on, while PIBT keeps the step collision-free.
+//
+// Guidance paths are kept across steps in absolute time and replanned lazily: when the agent is
+// not where its path says, when its goal changed, or when less than half the window is left.
+// The collision table counts, per (time mod (W+1), cell), the guidance paths there and, per
+// direction, those leaving the cell, so adding, removing and querying a path is O(W).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "gdrhcr/planner.hpp"
+
+namespace gdrhcr {
+
+struct LocalGuidanceConfig {
+  int window = 20;               // W: timesteps each guidance path covers
+  double collision_cost = 1.0;   // added per step that meets another path (vertex or swap)
+  bool lazy = true;              // keep valid paths; false replans every agent every step
+  int recheck = 20;              // a kept path is replanned if it meets another path within this many steps
+};
+
+class LocalGuidance {
+ public:
+  LocalGuidance(const Grid& grid, int num_agents, LocalGuidanceConfig config);
+
+  // Brings the guidance of `agents` up to date for timestep world.timestep, in the given order
+  // (earlier agents' paths are seen by later ones). Paths of other agents stay in the table.
+  void update(const WorldView& world, const std::vector<int>& agents);
+  // Sets agent i's expected path from time world.timestep on (e.g. a plan made by another
+  // solver), so guidance searches avoid it; path[0] is its cell now.
+  void set_path(int i, int now, const std::vector<Cell>& path);
+  // Forgets agent i's path.
+  void clear(int i);
+
+  // Agent i's next guidance cell, or kNoCell when it has none for this step.
+  Cell next_cell(int i, int now, Cell at) const;
+  // Agent i's guidance path from `now` on (empty when none).
+  std::vector<Cell> path_from(int i, int now) const;
+
+  long searches() const { return searches_; }
+  long expansions() const { return expansions_; }
+  const LocalGuidanceConfig& config() const { return cfg_; }
+
+ private:
+  struct Node {
+    float g, f;
+    int32_t t;
+    Cell v;
+    int32_t parent;
+  };
+  void drop_past(int i, int now);
+  void enroll(int i, int sign);
+  bool is_valid(const WorldView& world, int i) const;
+  void plan(const WorldView& world, int i);
+  int collisions(Cell from, Cell to, int abs_t) const;  // others' conflicts with from -> to at abs_t
+  int slot(int abs_t) const { return abs_t % slots_; }
+  int dir(Cell from, Cell to) const;
+
+  const Grid& grid_;
+  LocalGuidanceConfig cfg_;
+  int slots_;
+  std::vector<std::vector<Cell>> path_;  // per agent: cells at start_[i], start_[i]+1, ...
+  std::vector<int> start_;
+  std::vector<Cell> goal_;               // the goal each path was planned for
+  std::vector<uint16_t> at_;             // [slot * cells + c]: paths at c
+  std::vector<uint16_t> leaving_;        // [(slot * cells + c) * 4 + dir]: paths leaving c by dir
+  // Search scratch: closed marks stamped per (t, cell), node pool, open list.
+  std::vector<uint32_t> closed_;
+  uint32_t stamp_ = 0;
+  std::vector<Node> nodes_;
+  std::vector<int32_t> open_;
+  long searches_ = 0, expansions_ = 0;
+};
+
+}  // namespace gdrhcr
