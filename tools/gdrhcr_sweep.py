@@ -109,6 +109,24 @@ def expand(cfg):
     return runs
 
 
+def select(runs, args):
+    """The runs --labels, --maps and --agents keep; naming something the config lacks is an error."""
+    def wanted(opt, have):
+        if not opt:
+            return None
+        want = {x.strip() for x in opt.split(",") if x.strip()}
+        unknown = sorted(want - have)
+        if unknown:
+            raise ConfigError("%s not in the config (it has %s)" % (", ".join(unknown), ", ".join(sorted(have))))
+        return want
+    mapname = lambda r: os.path.splitext(os.path.basename(r["map"]))[0]
+    labels = wanted(args.labels, {r["label"] for r in runs})
+    maps = wanted(args.maps, {mapname(r) for r in runs})
+    agents = wanted(args.agents, {str(r["agents"]) for r in runs})
+    return [r for r in runs if (labels is None or r["label"] in labels) and (maps is None or mapname(r) in maps)
+            and (agents is None or str(r["agents"]) in agents)]
+
+
 def run_key(row):
     return tuple(str(row[k]) for k in KEY)
 
@@ -383,12 +401,19 @@ def main(argv=None):
                     help="seconds to wait for the scheduler and a first worker (default 30)")
     ap.add_argument("--sim", help="gdrhcr_sim binary (default: config 'sim' or build/src/gdrhcr_sim)")
     ap.add_argument("--limit", type=int, default=0, help="run at most this many new runs (0 = all)")
+    sel = ap.add_argument_group("selecting part of a config (the CSV keeps accumulating: run the rest later)")
+    sel.add_argument("--seeds", help="override the config's seeds: a count N (seeds 0..N-1) or a list 3,4,5")
+    sel.add_argument("--labels", help="only these planner labels (comma-separated)")
+    sel.add_argument("--maps", help="only these maps (comma-separated names, e.g. warehouse-10-20-10-2-1)")
+    sel.add_argument("--agents", help="only these agent counts (comma-separated)")
     args = ap.parse_args(argv)
     if args.jobs < 1:
         ap.error("--jobs must be at least 1")
     try:
         cfg = load_config(args.config)
-        runs = expand(cfg)
+        if args.seeds:
+            cfg["seeds"] = int(args.seeds) if args.seeds.isdigit() else [int(x) for x in args.seeds.split(",")]
+        runs = select(expand(cfg), args)
     except (OSError, yaml.YAMLError, ConfigError, ValueError, TypeError) as e:
         print("gdrhcr_sweep: bad config: %s" % e, file=sys.stderr)
         return 2
@@ -421,7 +446,7 @@ def main(argv=None):
         nworkers = len(client.scheduler_info().get("workers", {}))
         where = ("a local cluster of %d workers" % args.jobs) if local else \
             ("%s (%d workers now)" % (args.scheduler, nworkers))
-        print("gdrhcr_sweep: %d runs in config, %d already done, %d to run on %s"
+        print("gdrhcr_sweep: %d runs selected, %d already done, %d to run on %s"
               % (len(runs), n_done, len(todo), where), flush=True)
         return sweep(client, cfg, args, todo, wsim, wroot, local)
     except SweepError as e:

@@ -134,6 +134,14 @@ class SweepTest(unittest.TestCase):
                          [("A", 10), ("A", 20), ("A", 30), ("B", 10)])
         self.assertNotIn("agents", runs[-1]["options"])
 
+    def test_selecting_part_of_a_config(self):
+        self.assertEqual(self.sweep("--seeds", "1", "--labels", "PIBT", "--agents", "40"), 0)
+        rows = rows_of(self.csv)
+        self.assertEqual([(r["label"], r["agents"], r["seed"]) for r in rows], [("PIBT", "40", "0")])
+        self.assertEqual(self.sweep("--seeds", "1,2", "--maps", "random-32-32-20"), 0)
+        self.assertEqual(len(rows_of(self.csv)), 1 + 2 * 4)  # the first row kept, not redone
+        self.assertEqual(self.sweep("--labels", "RHCR"), 2)  # not in the config: an error
+
     def test_bad_config_and_missing_simulator(self):
         with open(self.cfg, "w") as f:
             f.write("steps: 3\n")
