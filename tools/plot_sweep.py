@@ -3,10 +3,17 @@
 (mean with a 1-SD band over seeds, one line per label), and GD-RHCR group statistics.
 
     tools/plot_sweep.py results/paper.csv --out docs/figures [--title-prefix TEXT]
+    tools/plot_sweep.py results/paper_mapd.csv --out docs/figures/paper --paper paper_mapd [--markdown]
 
 Writes <out>/<map>_throughput.png, _plan_time.png, _wall_time.png, _groups.png (when the
 CSV has group statistics) and _ablation.png (when labels read 'param=value', as in the
 ablation configs: one column of panels per parameter), and prints the table of means.
+
+--paper NAME lays the maps out as the paper's figures instead: one column per map (the paper's
+order), a throughput row over a plan-time row (log scale), mean and 1-SD bands, one colour per
+planner, into <out>/NAME.png; the same layout of wall times per run into <out>/NAME_wall.png
+and of GD-RHCR group statistics into <out>/NAME_groups.png. --markdown prints the table of
+means (and SDs) per map, agent count and label as Markdown.
 """
 import argparse
 import csv
@@ -20,7 +27,13 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-COLORS = {"GD-RHCR": "tab:red", "RHCR": "tab:green", "PIBT": "tab:blue"}
+COLORS = {"GD-RHCR": "tab:red", "GD-RHCR (paper)": "tab:red", "GD-RHCR (default)": "tab:orange",
+          "RHCR": "tab:green", "PIBT": "tab:blue"}
+# The paper's column order in its two figure families; other maps follow alphabetically.
+PAPER_ORDER = ["warehouse-10-20-10-2-1", "warehouse-10-20-10-2-2", "sortation-1", "sortation-2",
+               "random-64-64-20", "room-64-64-var1", "room-64-64-var2", "random-32-32-20",
+               "room-32-32-var1", "empty-48-48"]
+LABEL_ORDER = ["GD-RHCR (paper)", "GD-RHCR", "GD-RHCR (default)", "RHCR", "PIBT"]
 
 
 def load(path):
@@ -47,8 +60,12 @@ def series(rows, metric):
     return {label: [(a,) + stats(v) for a, v in sorted(d.items())] for label, d in by.items()}
 
 
-def panel(ax, data, ylabel, log=False):
-    for i, (label, pts) in enumerate(sorted(data.items())):
+def label_key(label):
+    return (LABEL_ORDER.index(label) if label in LABEL_ORDER else len(LABEL_ORDER), label)
+
+
+def panel(ax, data, ylabel, log=False, legend=True):
+    for i, (label, pts) in enumerate(sorted(data.items(), key=lambda kv: label_key(kv[0]))):
         xs = [p[0] for p in pts]
         mean = [p[1] for p in pts]
         lo = [p[1] - p[2] for p in pts]
@@ -61,7 +78,8 @@ def panel(ax, data, ylabel, log=False):
     if log:
         ax.set_yscale("log")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    if legend:
+        ax.legend(fontsize=8)
 
 
 def seeds_steps(rows):
@@ -124,14 +142,99 @@ def plot_ablation(rows, name, out, prefix):
     return [path]
 
 
+def map_name(row):
+    return os.path.splitext(os.path.basename(row["map"]))[0]
+
+
+def map_order(names):
+    return sorted(names, key=lambda n: (PAPER_ORDER.index(n) if n in PAPER_ORDER else len(PAPER_ORDER), n))
+
+
+def plot_paper(rows, name, out, prefix):
+    """The paper's layout: a column per map; rows of metrics; one shared legend."""
+    by_map = defaultdict(list)
+    for r in rows:
+        by_map[map_name(r)].append(r)
+    maps = map_order(by_map)
+    layouts = [("", [("throughput", "throughput [goals / step]", False),
+                     ("plan_time_mean_s", "mean plan time [s]", True)]),
+               ("_wall", [("wall_time_s", "wall time per run [s]", True)]),
+               ("_groups", [("groups_mean_count", "mean number of groups", False),
+                            ("groups_mean_size", "mean group size", False),
+                            ("groups_mean_max_size", "mean max group size", False)])]
+    files = []
+    for suffix, metrics in layouts:
+        if not any(series(by_map[m], metric) for m in maps for metric, _, _ in metrics):
+            continue
+        fig, axes = plt.subplots(len(metrics), len(maps), figsize=(2.9 * len(maps), 2.5 * len(metrics) + 0.9),
+                                 squeeze=False)
+        handles = {}
+        for c, m in enumerate(maps):
+            for r, (metric, ylabel, log) in enumerate(metrics):
+                ax = axes[r][c]
+                panel(ax, series(by_map[m], metric), ylabel if c == 0 else "", log, legend=False)
+                if r == 0:
+                    ax.set_title("%s\n(%s)" % (m, seeds_steps(by_map[m])), fontsize=9)
+                if r < len(metrics) - 1:
+                    ax.set_xlabel("")
+                ax.tick_params(labelsize=7)
+                for h, l in zip(*ax.get_legend_handles_labels()):
+                    handles.setdefault(l, h)
+        labels = sorted(handles, key=label_key)
+        fig.legend([handles[l] for l in labels], labels, loc="lower center", ncol=len(labels), fontsize=9,
+                   frameon=False)
+        fig.suptitle("%s%s (mean and 1 SD over seeds)" % (prefix, name), fontsize=10)
+        fig.tight_layout(rect=(0, 0.06, 1, 0.96))
+        path = os.path.join(out, "%s%s.png" % (name, suffix))
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        files.append(path)
+    return files
+
+
+def markdown_table(rows):
+    """Mean ± SD throughput and mean plan time per map, agent count and label (n=seeds when a
+    label has fewer seeds at that point than the most any label has)."""
+    by_map = defaultdict(list)
+    for r in rows:
+        by_map[map_name(r)].append(r)
+    labels = sorted({r["label"] for r in rows}, key=label_key)
+    lines = ["| map | agents | seeds | " + " | ".join("%s tp" % l for l in labels) + " | "
+             + " | ".join("%s plan s" % l for l in labels) + " |",
+             "|" + "---|" * (3 + 2 * len(labels))]
+    for m in map_order(by_map):
+        tp, pt = series(by_map[m], "throughput"), series(by_map[m], "plan_time_mean_s")
+        agents = sorted({int(r["agents"]) for r in by_map[m]})
+        for a in agents:
+            seeds = len({r["seed"] for r in by_map[m] if int(r["agents"]) == a})
+            cells = []
+            for l in labels:
+                p = [x for x in tp.get(l, []) if x[0] == a]
+                cells.append(("%.3f ± %.3f" % (p[0][1], p[0][2]) + (" (n=%d)" % p[0][3] if p[0][3] != seeds else ""))
+                             if p else "-")
+            for l in labels:
+                p = [x for x in pt.get(l, []) if x[0] == a]
+                cells.append("%.4f" % p[0][1] if p else "-")
+            lines.append("| %s | %d | %d | %s |" % (m, a, seeds, " | ".join(cells)))
+    return "\n".join(lines)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("csv")
     ap.add_argument("--out", required=True)
     ap.add_argument("--title-prefix", default="")
+    ap.add_argument("--paper", metavar="NAME", help="the paper's layout, into <out>/NAME.png (see above)")
+    ap.add_argument("--markdown", action="store_true", help="print the table of means as Markdown")
     args = ap.parse_args(argv)
     rows = load(args.csv)
     os.makedirs(args.out, exist_ok=True)
+    if args.paper:
+        for path in plot_paper(rows, args.paper, args.out, args.title_prefix):
+            print("wrote", path)
+        if args.markdown:
+            print(markdown_table(rows))
+        return 0
     by_map = defaultdict(list)
     for r in rows:
         by_map[os.path.splitext(os.path.basename(r["map"]))[0]].append(r)

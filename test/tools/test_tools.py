@@ -1,7 +1,9 @@
 """Tests of the experiment harness: the sweep's CSV and resumption (a killed sweep resumes
 without duplicates), plots from a tiny CSV, and the group picture's partition.
 Run: GDRHCR_SIM=build/src/gdrhcr_sim python3 -m unittest discover -s test/tools"""
+import contextlib
 import csv
+import io
 import os
 import signal
 import subprocess
@@ -184,6 +186,14 @@ class PlotTest(unittest.TestCase):
                 self.assertTrue(os.path.exists(p), name)
                 with open(p, "rb") as f:
                     self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
+            paper = os.path.join(tmp, "paper")
+            with contextlib.redirect_stdout(io.StringIO()) as out:
+                self.assertEqual(plot_sweep.main([path, "--out", paper, "--paper", "fam", "--markdown"]), 0)
+            for name in ("fam.png", "fam_wall.png", "fam_groups.png"):
+                with open(os.path.join(paper, name), "rb") as f:
+                    self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
+            table = out.getvalue()
+            self.assertIn("| x | 10 | 2 | 1.500 ± 0.707 |", table)  # GD-RHCR first: agents/10 + seed
             data = plot_sweep.series(plot_sweep.load(path), "throughput")
             self.assertAlmostEqual(data["PIBT"][0][1], 1.5)  # mean of 1.0 and 2.0
             self.assertAlmostEqual(data["PIBT"][0][2], 0.7071067811865476)  # sample SD
