@@ -3,38 +3,131 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 namespace gdrhcr {
 
-DistRow::DistRow(const Grid& grid, Cell goal, const std::vector<uint8_t>* blocked)
-    : goal_(goal), dist_(grid.num_cells(), kUnreachable) {
-  std::vector<Cell> queue;
-  queue.reserve(grid.free_cells().size());
-  dist_[goal] = 0;
-  queue.push_back(goal);
-  for (size_t head = 0; head < queue.size(); ++head) {
-    const Cell c = queue[head];
-    const int32_t d = dist_[c] + 1;
-    for (Cell n : grid.neighbours(c)) {
-      if (dist_[n] != kUnreachable || (blocked && (*blocked)[n])) continue;
-      dist_[n] = d;
-      queue.push_back(n);
-    }
+// libtbb is not built with ThreadSanitizer (see gd_rhcr.cpp): under TSan we state the
+// happens-before edges of the parallel BFS batch ourselves.
+#if defined(__SANITIZE_THREAD__)
+extern "C" void __tsan_acquire(void* addr);
+extern "C" void __tsan_release(void* addr);
+#define GDRHCR_TSAN_ACQUIRE(p) __tsan_acquire(p)
+#define GDRHCR_TSAN_RELEASE(p) __tsan_release(p)
+#else
+#define GDRHCR_TSAN_ACQUIRE(p) ((void)(p))
+#define GDRHCR_TSAN_RELEASE(p) ((void)(p))
+#endif
+
+namespace {
+// What a cache entry costs besides its row: the Entry, and the hash node (key, pointer, next).
+constexpr size_t kEntryOverhead = sizeof(std::atomic<uint64_t>) + sizeof(std::shared_ptr<const DistRow>) +
+                                  sizeof(Cell) + 2 * sizeof(void*);
+}  // namespace
+
+FreeCellIndex::FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked_cells) {
+  const auto& free = grid.free_cells();
+  num_free = static_cast<int32_t>(free.size());
+  cell_of = free;
+  slot_of.assign(grid.num_cells(), num_free);
+  for (int32_t s = 0; s < num_free; ++s) slot_of[free[s]] = s;
+  adj_begin.resize(size_t(num_free) + 1);
+  adj.reserve(size_t(num_free) * 4);
+  for (int32_t s = 0; s < num_free; ++s) {
+    adj_begin[s] = static_cast<int32_t>(adj.size());
+    for (Cell n : grid.neighbours(free[s])) adj.push_back(slot_of[n]);
+  }
+  adj_begin[num_free] = static_cast<int32_t>(adj.size());
+  adj.shrink_to_fit();
+  if (!blocked_cells.empty()) {
+    blocked.assign(num_free, 0);
+    for (Cell c : blocked_cells)
+      if (grid.is_free(c)) blocked[slot_of[c]] = 1;
   }
 }
 
-DistTable::DistTable(const Grid& grid, size_t budget_bytes) : grid_(grid), budget_(budget_bytes) {}
+size_t FreeCellIndex::bytes() const {
+  return sizeof(*this) + slot_of.capacity() * sizeof(int32_t) + cell_of.capacity() * sizeof(Cell) +
+         adj_begin.capacity() * sizeof(int32_t) + adj.capacity() * sizeof(int32_t) + blocked.capacity();
+}
+
+namespace {
+std::vector<Cell> blocked_list(const Grid& grid, const std::vector<uint8_t>* blocked) {
+  std::vector<Cell> out;
+  if (blocked)
+    for (Cell c = 0; c < grid.num_cells() && c < Cell(blocked->size()); ++c)
+      if ((*blocked)[c]) out.push_back(c);
+  return out;
+}
+
+// BFS over slots from `goal_slot`, writing distances into d (num_free + 1 entries, all set to
+// `unreached` beforehand). The queue is the caller's scratch (reused per thread).
+template <typename T>
+void bfs_slots(const FreeCellIndex& ix, int32_t goal_slot, T* d, T unreached, std::vector<int32_t>& queue) {
+  queue.resize(ix.num_free);
+  const int32_t* begin = ix.adj_begin.data();
+  const int32_t* adj = ix.adj.data();
+  const uint8_t* blocked = ix.blocked.empty() ? nullptr : ix.blocked.data();
+  size_t head = 0, tail = 0;
+  d[goal_slot] = 0;
+  queue[tail++] = goal_slot;
+  while (head < tail) {
+    const int32_t s = queue[head++];
+    const T nd = static_cast<T>(d[s] + 1);
+    for (int32_t k = begin[s], e = begin[s + 1]; k < e; ++k) {
+      const int32_t n = adj[k];
+      if (d[n] != unreached || (blocked && blocked[n])) continue;
+      d[n] = nd;
+      queue[tail++] = n;
+    }
+  }
+}
+}  // namespace
+
+DistRow::DistRow(std::shared_ptr<const FreeCellIndex> index, Cell goal)
+    : index_(std::move(index)), slot_of_(index_->slot_of.data()), goal_(goal), narrow_(!index_->wide()) {
+  bfs();
+}
+
+DistRow::DistRow(const Grid& grid, Cell goal, const std::vector<uint8_t>* blocked)
+    : DistRow(std::make_shared<const FreeCellIndex>(grid, blocked_list(grid, blocked)), goal) {}
+
+void DistRow::bfs() {
+  const FreeCellIndex& ix = *index_;
+  const int32_t goal_slot = ix.slot_of.at(goal_);
+  if (goal_slot >= ix.num_free) throw std::out_of_range("distance row: goal is not a free cell");
+  thread_local std::vector<int32_t> queue;
+  if (narrow_) {
+    d16_.assign(size_t(ix.num_free) + 1, 0xFFFF);
+    bfs_slots<uint16_t>(ix, goal_slot, d16_.data(), 0xFFFF, queue);
+  } else {
+    d32_.assign(size_t(ix.num_free) + 1, UINT32_MAX);
+    bfs_slots<uint32_t>(ix, goal_slot, d32_.data(), UINT32_MAX, queue);
+  }
+}
+
+size_t DistRow::bytes() const {
+  return sizeof(DistRow) + d16_.capacity() * sizeof(uint16_t) + d32_.capacity() * sizeof(uint32_t);
+}
+
+DistTable::DistTable(const Grid& grid, size_t budget_bytes)
+    : DistTable(grid, std::vector<Cell>{}, budget_bytes) {}
 
 DistTable::DistTable(const Grid& grid, const std::vector<Cell>& blocked, size_t budget_bytes)
-    : grid_(grid), budget_(budget_bytes) {
-  if (blocked.empty()) return;
-  blocked_.assign(grid.num_cells(), 0);
-  for (Cell c : blocked)
-    if (grid.valid_cell(c)) blocked_[c] = 1;
+    : grid_(grid), index_(std::make_shared<const FreeCellIndex>(grid, blocked)), budget_(budget_bytes) {}
+
+size_t DistTable::row_bytes() const {
+  return sizeof(DistRow) + (size_t(index_->num_free) + 1) * (index_->wide() ? 4 : 2) + kEntryOverhead;
+}
+
+void DistTable::check_goal(Cell goal) const {
+  if (!grid_.is_free(goal))
+    throw std::out_of_range("distance table: goal " + grid_.describe(goal) + " is not a free cell");
 }
 
 std::shared_ptr<const DistRow> DistTable::row(Cell goal) const {
-  if (!grid_.is_free(goal))
-    throw std::out_of_range("distance table: goal " + grid_.describe(goal) + " is not a free cell");
+  check_goal(goal);
   const uint64_t now = ++clock_;
   {
     std::shared_lock lock(mutex_);
@@ -45,35 +138,87 @@ std::shared_ptr<const DistRow> DistTable::row(Cell goal) const {
     }
   }
   // BFS outside the lock: two threads may race to compute the same row; one copy wins.
-  auto fresh = std::make_shared<const DistRow>(grid_, goal, blocked_.empty() ? nullptr : &blocked_);
+  auto fresh = std::make_shared<const DistRow>(index_, goal);
   ++bfs_count_;
   std::unique_lock lock(mutex_);
-  auto [it, inserted] = rows_.try_emplace(goal);
+  return insert_locked(std::move(fresh), now);
+}
+
+std::shared_ptr<const DistRow> DistTable::insert_locked(std::shared_ptr<const DistRow> fresh, uint64_t now) const {
+  auto [it, inserted] = rows_.try_emplace(fresh->goal());
   if (inserted) {
     it->second = std::make_unique<Entry>();
-    it->second->row = fresh;
-    bytes_ += fresh->bytes();
+    it->second->row = std::move(fresh);
+    bytes_ += it->second->row->bytes() + kEntryOverhead;
   }
   it->second->last_use.store(now, std::memory_order_relaxed);
   auto result = it->second->row;
-  if (bytes_ > budget_) evict_locked();
+  if (bytes_ > budget_ && bytes_ > evict_at_) evict_locked();
+  peak_bytes_ = std::max(peak_bytes_, bytes_);
   return result;
 }
 
 void DistTable::evict_locked() const {
-  // Drop the least recently used half of the budget's worth of rows in one pass, so the
-  // O(n log n) sort is amortised over many insertions.
+  // Drop the least recently used rows nobody else holds until a quarter of the budget is free,
+  // so the O(n log n) sort is amortised over many insertions. A row a solver still holds is
+  // kept: evicting it would free nothing and only cost a second BFS.
   std::vector<std::pair<uint64_t, Cell>> order;
   order.reserve(rows_.size());
-  for (auto& [goal, e] : rows_) order.emplace_back(e->last_use.load(), goal);
+  for (auto& [goal, e] : rows_)
+    if (e->row.use_count() == 1) order.emplace_back(e->last_use.load(std::memory_order_relaxed), goal);
   std::sort(order.begin(), order.end());
-  const size_t target = budget_ / 2;
+  const size_t target = budget_ - budget_ / 4;
   for (auto& [use, goal] : order) {
-    if (bytes_ <= target || rows_.size() <= 1) break;
+    if (bytes_ <= target) break;
     auto it = rows_.find(goal);
-    bytes_ -= it->second->row->bytes();
+    bytes_ -= it->second->row->bytes() + kEntryOverhead;
     rows_.erase(it);
+    ++evictions_;
   }
+  if (bytes_ > budget_) {
+    // Held rows alone exceed the budget: try again only after another sixteenth of it.
+    ++over_budget_;
+    evict_at_ = bytes_ + std::max<size_t>(budget_ / 16, row_bytes());
+  } else {
+    evict_at_ = 0;
+  }
+}
+
+void DistTable::prefetch(const std::vector<Cell>& goals) const {
+  // The distinct free goals not cached yet, in first-seen order.
+  std::vector<Cell> missing;
+  {
+    std::shared_lock lock(mutex_);
+    std::unordered_map<Cell, char> seen;
+    seen.reserve(goals.size());
+    for (Cell g : goals) {
+      if (!grid_.is_free(g) || !seen.emplace(g, 1).second) continue;
+      auto it = rows_.find(g);
+      if (it == rows_.end()) missing.push_back(g);
+    }
+  }
+  if (missing.empty()) return;
+  std::vector<std::shared_ptr<const DistRow>> fresh(missing.size());
+  int sync = 0;
+  GDRHCR_TSAN_RELEASE(&sync);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, missing.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+    GDRHCR_TSAN_ACQUIRE(&sync);
+    for (size_t k = r.begin(); k < r.end(); ++k) fresh[k] = std::make_shared<const DistRow>(index_, missing[k]);
+    GDRHCR_TSAN_RELEASE(&sync);
+  });
+  GDRHCR_TSAN_ACQUIRE(&sync);
+  bfs_count_ += missing.size();
+  std::unique_lock lock(mutex_);
+  for (auto& f : fresh) insert_locked(std::move(f), ++clock_);
+}
+
+std::vector<std::shared_ptr<const DistRow>> DistTable::rows(const std::vector<Cell>& goals) const {
+  for (Cell g : goals) check_goal(g);
+  prefetch(goals);
+  std::vector<std::shared_ptr<const DistRow>> out;
+  out.reserve(goals.size());
+  for (Cell g : goals) out.push_back(row(g));  // cached now, unless evicted meanwhile
+  return out;
 }
 
 size_t DistTable::cached_rows() const {
@@ -84,6 +229,11 @@ size_t DistTable::cached_rows() const {
 size_t DistTable::cached_bytes() const {
   std::shared_lock lock(mutex_);
   return bytes_;
+}
+
+size_t DistTable::peak_bytes() const {
+  std::shared_lock lock(mutex_);
+  return peak_bytes_;
 }
 
 }  // namespace gdrhcr

@@ -1,11 +1,43 @@
-// BFS distances against hand-checked cases, laziness, and the memory budget.
+// BFS distances against hand-checked cases and a plain full BFS on random maps, compact rows
+// (16-bit and 32-bit), laziness, the memory budget (counted bytes), batch prefetch and threads.
 #include <gtest/gtest.h>
 
+#include <deque>
+#include <random>
 #include <thread>
 
 #include "gdrhcr/dist_table.hpp"
 
 using namespace gdrhcr;
+
+namespace {
+// The reference: a plain BFS over grid cells into an int array (what DistRow used to be).
+std::vector<int> plain_bfs(const Grid& g, Cell goal, const std::vector<uint8_t>& blocked = {}) {
+  std::vector<int> d(g.num_cells(), kUnreachable);
+  std::deque<Cell> q{goal};
+  d[goal] = 0;
+  while (!q.empty()) {
+    Cell c = q.front();
+    q.pop_front();
+    for (Cell n : g.neighbours(c)) {
+      if (d[n] != kUnreachable || (!blocked.empty() && blocked[n])) continue;
+      d[n] = d[c] + 1;
+      q.push_back(n);
+    }
+  }
+  return d;
+}
+
+Grid random_map(int w, int h, double wall_density, std::mt19937_64& rng) {
+  std::vector<std::string> rows(h, std::string(w, '.'));
+  std::bernoulli_distribution wall(wall_density);
+  for (auto& r : rows)
+    for (auto& ch : r)
+      if (wall(rng)) ch = '@';
+  rows[0][0] = '.';  // at least one free cell
+  return Grid::from_rows(rows);
+}
+}  // namespace
 
 TEST(DistTable, HandCheckedDistancesAroundAWall) {
   // The wall forces a detour: from (0,0) to (2,0) is 2 by Manhattan distance but 6 by path.
@@ -35,6 +67,68 @@ TEST(DistTable, BlockedGoalIsAnError) {
   DistTable d(g);
   EXPECT_THROW(d.row(g.cell(1, 0)), std::out_of_range);
   EXPECT_THROW(d.row(-1), std::out_of_range);
+  EXPECT_THROW(d.rows({g.cell(0, 0), g.cell(1, 0)}), std::out_of_range);
+  d.prefetch({g.cell(1, 0), -1, 99});  // skipped, no error
+  EXPECT_EQ(d.bfs_count(), 0u);
+}
+
+TEST(DistTable, CompactRowsEqualAPlainBfsOnRandomMapsWithWalls) {
+  // Many seeds, map sizes and wall densities (some maps split into several components), every
+  // cell of every row, with and without blocked cells (offline robots).
+  for (uint64_t seed = 1; seed <= 60; ++seed) {
+    std::mt19937_64 rng(seed);
+    const int w = 3 + int(rng() % 40), h = 1 + int(rng() % 30);
+    const double density = 0.05 * double(rng() % 9);
+    Grid g = random_map(w, h, density, rng);
+    std::vector<Cell> blocked_cells;
+    std::vector<uint8_t> blocked(g.num_cells(), 0);
+    if (seed % 2 == 0)
+      for (int k = 0; k < 3; ++k) {
+        Cell c = g.free_cells()[rng() % g.free_cells().size()];
+        blocked_cells.push_back(c);
+        blocked[c] = 1;
+      }
+    DistTable d(g, blocked_cells);
+    ASSERT_TRUE(d.row(g.free_cells()[0])->narrow());
+    for (int k = 0; k < 8; ++k) {
+      const Cell goal = g.free_cells()[rng() % g.free_cells().size()];
+      const auto ref = plain_bfs(g, goal, blocked_cells.empty() ? std::vector<uint8_t>{} : blocked);
+      const auto row = d.row(goal);
+      for (Cell c = 0; c < g.num_cells(); ++c)
+        ASSERT_EQ((*row)[c], ref[c]) << "seed " << seed << " goal " << g.describe(goal) << " cell " << g.describe(c);
+    }
+  }
+}
+
+TEST(DistTable, WideRowsPastSixtyFiveThousandFreeCells) {
+  // A 300 x 480 serpentine (every other row a wall with one gap at alternating ends): 72,239
+  // free cells, too many for 16-bit rows, so the 32-bit path is used; distances pass 65,535.
+  std::vector<std::string> rows(480, std::string(300, '.'));
+  for (int y = 1; y < 480; y += 2) {
+    rows[y] = std::string(300, '@');
+    rows[y][(y / 2) % 2 ? 0 : 299] = '.';
+  }
+  Grid g = Grid::from_rows(rows);
+  ASSERT_GT(g.free_cells().size(), size_t(FreeCellIndex::kMaxNarrowFree));
+  DistTable d(g);
+  const Cell goal = g.cell(0, 0);
+  const auto row = d.row(goal);
+  EXPECT_FALSE(row->narrow());
+  const auto ref = plain_bfs(g, goal);
+  for (Cell c = 0; c < g.num_cells(); ++c) ASSERT_EQ((*row)[c], ref[c]) << g.describe(c);
+  EXPECT_GT((*row)[g.cell(299, 478)], 65535);
+  EXPECT_EQ(row->bytes(), sizeof(DistRow) + (g.free_cells().size() + 1) * 4);
+}
+
+TEST(DistTable, NarrowRowsAtTheLimit) {
+  // A corridor of exactly 65,534 free cells: distances up to 65,533 still fit in 16 bits.
+  const int n = FreeCellIndex::kMaxNarrowFree;
+  Grid line = Grid::from_rows({std::string(n, '.')});
+  DistTable d(line);
+  auto row = d.row(line.cell(0, 0));
+  EXPECT_TRUE(row->narrow());
+  EXPECT_EQ((*row)[line.cell(n - 1, 0)], n - 1);
+  EXPECT_EQ((*row)[line.cell(n / 2, 0)], n / 2);
 }
 
 TEST(DistTable, LazyAndCached) {
@@ -47,31 +141,126 @@ TEST(DistTable, LazyAndCached) {
   d.get(g.cell(1, 1), g.cell(0, 0));
   EXPECT_EQ(d.bfs_count(), 2u);
   EXPECT_EQ(d.cached_rows(), 2u);
+  EXPECT_EQ(d.cached_bytes(), 2 * d.row_bytes());
 }
 
-TEST(DistTable, BudgetEvictsLeastRecentlyUsedRows) {
-  Grid g = Grid::from_rows(std::vector<std::string>(20, std::string(20, '.')));
-  const size_t row_bytes = 400 * sizeof(int32_t);
-  DistTable d(g, 10 * row_bytes);
+TEST(DistTable, RowsAreSixteenBitsPerFreeCell) {
+  // warehouse-10-20-10-2-1: every row is 2 bytes per free cell (plus one sentinel slot), not
+  // 4 bytes per grid cell.
+  Grid g = Grid::load(std::string(GDRHCR_SOURCE_DIR) + "/maps/warehouse-10-20-10-2-1.map");
+  DistTable d(g);
+  auto row = d.row(g.free_cells()[0]);
+  EXPECT_EQ(row->bytes(), sizeof(DistRow) + (g.free_cells().size() + 1) * 2);
+  EXPECT_LT(row->bytes(), size_t(g.num_cells()) * 4 / 2);
+}
+
+TEST(DistTable, BudgetHoldsUnderManyDistinctGoals) {
+  Grid g = Grid::from_rows(std::vector<std::string>(30, std::string(30, '.')));
+  DistTable probe(g);
+  const size_t budget = 10 * probe.row_bytes();
+  DistTable d(g, budget);
   auto held = d.row(g.cell(0, 0));  // a row kept by a solver survives eviction
-  for (int i = 1; i < 100; ++i) d.get(g.cell(i % 20, i / 20), 0);
-  EXPECT_LE(d.cached_bytes(), 10 * row_bytes);
+  for (size_t i = 1; i < g.free_cells().size(); ++i) {
+    d.get(g.free_cells()[i], 0);
+    ASSERT_LE(d.cached_bytes(), budget) << "after " << i << " goals";
+    ASSERT_LE(d.cached_rows(), 10u);
+  }
+  EXPECT_LE(d.peak_bytes(), budget);
+  EXPECT_EQ(d.bfs_count(), g.free_cells().size());
+  EXPECT_GT(d.evictions(), 800u);
+  EXPECT_EQ(d.over_budget_inserts(), 0u);
   EXPECT_EQ((*held)[g.cell(3, 4)], 7);
+  // The held row is still the cached one: asking again costs no BFS.
+  const auto bfs_before = d.bfs_count();
+  EXPECT_EQ(d.row(g.cell(0, 0)), held);
+  EXPECT_EQ(d.bfs_count(), bfs_before);
   // Evicted rows are recomputed with the same answer.
-  EXPECT_EQ(d.get(g.cell(1, 0), g.cell(19, 19)), 18 + 19);
+  EXPECT_EQ(d.get(g.cell(1, 0), g.cell(29, 29)), 28 + 29);
+}
+
+TEST(DistTable, HeldRowsAreNeverEvictedAndAreCounted) {
+  // Solvers hold 20 rows at once with a budget for 10: the cache keeps all 20 (they are live
+  // memory anyway), says so, and returns under budget once they are released.
+  Grid g = Grid::from_rows(std::vector<std::string>(20, std::string(20, '.')));
+  DistTable probe(g);
+  const size_t budget = 10 * probe.row_bytes();
+  DistTable d(g, budget);
+  std::vector<std::shared_ptr<const DistRow>> held;
+  for (int i = 0; i < 20; ++i) held.push_back(d.row(g.free_cells()[i]));
+  EXPECT_EQ(d.cached_rows(), 20u);
+  EXPECT_EQ(d.cached_bytes(), 20 * d.row_bytes());
+  EXPECT_GT(d.over_budget_inserts(), 0u);
+  for (int i = 0; i < 20; ++i) EXPECT_EQ(d.row(g.free_cells()[i]), held[i]);
+  EXPECT_EQ(d.bfs_count(), 20u);
+  held.clear();
+  for (int i = 20; i < 60; ++i) d.row(g.free_cells()[i]);
+  EXPECT_LE(d.cached_bytes(), budget);
+}
+
+TEST(DistTable, PrefetchComputesMissingRowsOnceInParallel) {
+  Grid g = Grid::load(std::string(GDRHCR_SOURCE_DIR) + "/maps/random-32-32-20.map");
+  DistTable d(g);
+  std::vector<Cell> goals;
+  for (size_t i = 0; i < g.free_cells().size(); i += 3) goals.push_back(g.free_cells()[i]);
+  goals.push_back(goals[0]);  // duplicates cost one BFS
+  d.get(goals[1], goals[2]);
+  d.prefetch(goals);
+  EXPECT_EQ(d.bfs_count(), goals.size() - 1);
+  EXPECT_EQ(d.cached_rows(), goals.size() - 1);
+  auto rows = d.rows(goals);
+  EXPECT_EQ(d.bfs_count(), goals.size() - 1);  // all cached
+  ASSERT_EQ(rows.size(), goals.size());
+  for (size_t k = 0; k < goals.size(); k += 17) {
+    const auto ref = plain_bfs(g, goals[k]);
+    EXPECT_EQ(rows[k]->goal(), goals[k]);
+    for (Cell c = 0; c < g.num_cells(); ++c) ASSERT_EQ((*rows[k])[c], ref[c]);
+  }
+}
+
+TEST(DistTable, PrefetchRespectsTheBudget) {
+  Grid g = Grid::load(std::string(GDRHCR_SOURCE_DIR) + "/maps/random-32-32-20.map");
+  DistTable probe(g);
+  const size_t budget = 25 * probe.row_bytes();
+  DistTable d(g, budget);
+  std::vector<Cell> goals(g.free_cells().begin(), g.free_cells().begin() + 200);
+  d.prefetch(goals);
+  EXPECT_LE(d.cached_bytes(), budget);
+  EXPECT_LE(d.peak_bytes(), budget);
+  EXPECT_EQ(d.bfs_count(), 200u);
+}
+
+TEST(DistTable, RowOutlivesItsTable) {
+  Grid g = Grid::from_rows({"...", ".@.", "..."});
+  std::shared_ptr<const DistRow> row;
+  {
+    DistTable d(g);
+    row = d.row(g.cell(0, 0));
+  }
+  EXPECT_EQ((*row)[g.cell(2, 2)], 4);
+  EXPECT_GE((*row)[g.cell(1, 1)], kUnreachable);
 }
 
 TEST(DistTable, ConcurrentQueriesAgree) {
   Grid g = Grid::load(std::string(GDRHCR_SOURCE_DIR) + "/maps/random-32-32-20.map");
-  DistTable d(g, 64 * 1024);  // small budget: eviction races with lookups
+  DistTable probe(g);
+  DistTable d(g, 20 * probe.row_bytes());  // small budget: eviction races with lookups
   std::vector<std::thread> threads;
   std::vector<long> sums(4, 0);
   for (int t = 0; t < 4; ++t)
     threads.emplace_back([&, t] {
-      for (size_t i = 0; i < g.free_cells().size(); i += 7)
+      for (size_t i = 0; i < g.free_cells().size(); i += 7) {
         sums[t] += d.get(g.free_cells()[i], g.free_cells()[0]);
+        if (t == 3 && i % 70 == 0) {  // one thread warms batches at the same time
+          std::vector<Cell> batch(g.free_cells().begin() + i, g.free_cells().begin() + std::min(i + 8, g.free_cells().size()));
+          d.prefetch(batch);
+        }
+      }
     });
   for (auto& th : threads) th.join();
   for (int t = 1; t < 4; ++t) EXPECT_EQ(sums[t], sums[0]);
   EXPECT_GT(sums[0], 0);
+  long ref = 0;
+  const auto from0 = plain_bfs(g, g.free_cells()[0]);
+  for (size_t i = 0; i < g.free_cells().size(); i += 7) ref += from0[g.free_cells()[i]];  // symmetric
+  EXPECT_EQ(sums[0], ref);
 }

@@ -1,10 +1,26 @@
-// Shortest-path distance tables, one per goal, computed lazily by BFS and cached.
+// Shortest-path distance tables, one per goal, computed by BFS on first use and cached.
 //
 // As in Kei18/pibt2 and lacam3 (Okumura et al.), every solver shares one table, so a goal's BFS
 // is paid once however many agents and solvers ask. Unlike RHCR's all-pairs table (437 MB on
-// warehouse-10-20-10-2-1), only goals in use are kept, under a memory budget: the least
-// recently used rows are evicted. Rows are handed out as shared pointers, so eviction never
-// invalidates a row a solver is still reading. Thread-safe: parallel groups query it at once.
+// warehouse-10-20-10-2-1), only goals in use are kept, under a memory budget.
+//
+// Compact rows (issue 12, fleets of 10,000 robots): a row stores one distance per FREE cell,
+// not per grid cell, in 16 bits (0xFFFF = unreachable) when the map has at most 65,534 free
+// cells (so every distance fits below the sentinel), else in 32 bits. Grid cells are mapped to
+// free-cell slots by one index shared by all rows; obstacles map to an extra slot that always
+// reads unreachable. On warehouse-20-40-10-2-2 (164 x 340, 38,756 free cells) a row is 77.5 KB
+// instead of the 223 KB of an int32 array over the grid.
+//
+// Memory: every row handed out is owned by the cache until evicted, and only rows nobody else
+// holds (shared_ptr use count 1) are evicted, least recently used first. So cached_bytes() is
+// the memory of every live row (exact: payload plus object sizes), and it stays within the
+// budget unless the rows solvers hold at once exceed it (counted by over_budget_inserts()).
+//
+// Batch warm-up: prefetch(goals) computes the missing rows of a set of goals in parallel on
+// oneTBB's pool (one BFS per task); rows(goals) does the same and returns the handles.
+//
+// Thread-safe: parallel groups query it at once. Two threads asking for the same missing row at
+// the same moment may both run its BFS (counted); one copy is kept.
 #pragma once
 
 #include <atomic>
@@ -21,18 +37,55 @@ namespace gdrhcr {
 
 constexpr int kUnreachable = INT32_MAX / 4;
 
+// The free cells of a grid as dense slots 0..F-1 (in increasing cell order), the neighbour lists
+// in slot space, and the cell -> slot map (obstacles -> F). Built once per DistTable and shared
+// by its rows, so a row outliving its table stays readable.
+struct FreeCellIndex {
+  explicit FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked = {});
+  int32_t num_free = 0;
+  std::vector<int32_t> slot_of;       // per grid cell; num_free for obstacles
+  std::vector<Cell> cell_of;          // per slot
+  std::vector<int32_t> adj_begin;     // CSR over slots: neighbours of s are
+  std::vector<int32_t> adj;           //   adj[adj_begin[s] .. adj_begin[s+1])
+  std::vector<uint8_t> blocked;       // per slot; empty when nothing is blocked
+  bool wide() const { return num_free > kMaxNarrowFree; }
+  size_t bytes() const;
+  // 16-bit rows hold distances 0..65,534 and 0xFFFF as the sentinel; a component of F free
+  // cells has distances up to F - 1, so F <= 65,535 fits. We keep one spare: F <= 65,534.
+  static constexpr int32_t kMaxNarrowFree = 65534;
+};
+
 // Distances from every cell to one goal (kUnreachable for obstacles and other components).
 class DistRow {
  public:
-  // `blocked` (per cell, optional): cells the BFS never enters, though it may start from one.
+  // A full BFS from `goal` over `index` (whose blocked slots the BFS never enters, though it
+  // may start from one).
+  DistRow(std::shared_ptr<const FreeCellIndex> index, Cell goal);
+  // The same for a one-off row; builds its own index (tests, small tools).
   DistRow(const Grid& grid, Cell goal, const std::vector<uint8_t>* blocked = nullptr);
-  int operator[](Cell c) const { return dist_[c]; }
+
+  int operator[](Cell c) const {
+    const int32_t s = slot_of_[c];
+    if (narrow_) {
+      const uint16_t v = d16_[s];
+      return v == 0xFFFF ? kUnreachable : int(v);
+    }
+    const uint32_t v = d32_[s];
+    return v == UINT32_MAX ? kUnreachable : int(v);
+  }
   Cell goal() const { return goal_; }
-  size_t bytes() const { return dist_.size() * sizeof(int32_t); }
+  bool narrow() const { return narrow_; }
+  // Heap and object bytes of this row (the shared index is counted once, by the table).
+  size_t bytes() const;
 
  private:
+  void bfs();
+  std::shared_ptr<const FreeCellIndex> index_;
+  const int32_t* slot_of_;
   Cell goal_;
-  std::vector<int32_t> dist_;
+  bool narrow_;
+  std::vector<uint16_t> d16_;  // num_free + 1 slots, the last one unreachable (obstacles)
+  std::vector<uint32_t> d32_;  // the same, for maps with more than 65,534 free cells
 };
 
 class DistTable {
@@ -48,26 +101,46 @@ class DistTable {
   std::shared_ptr<const DistRow> row(Cell goal) const;
   int get(Cell goal, Cell from) const { return (*row(goal))[from]; }
 
+  // Computes the missing rows among `goals` in parallel (oneTBB), as a batch warm-up. Goals
+  // that are not free cells are skipped. Rows are inserted as if queried in the given order.
+  void prefetch(const std::vector<Cell>& goals) const;
+  // The rows of `goals` (same order), missing ones computed in parallel. Throws like row().
+  std::vector<std::shared_ptr<const DistRow>> rows(const std::vector<Cell>& goals) const;
+
   const Grid& grid() const { return grid_; }
+  size_t budget_bytes() const { return budget_; }
   size_t cached_rows() const;
+  // Bytes of the cached rows (every live row the table handed out), exact.
   size_t cached_bytes() const;
+  size_t peak_bytes() const;
+  // Bytes of the shared free-cell index (paid once per table).
+  size_t index_bytes() const { return index_->bytes(); }
+  size_t row_bytes() const;  // bytes of one row on this map
   uint64_t bfs_count() const { return bfs_count_.load(); }
+  uint64_t evictions() const { return evictions_.load(); }
+  // Insertions that left the cache over budget because every cached row was held by a solver.
+  uint64_t over_budget_inserts() const { return over_budget_.load(); }
 
  private:
   struct Entry {
     std::shared_ptr<const DistRow> row;
     mutable std::atomic<uint64_t> last_use{0};
   };
+  std::shared_ptr<const DistRow> insert_locked(std::shared_ptr<const DistRow> fresh, uint64_t now) const;
   void evict_locked() const;
+  void check_goal(Cell goal) const;
 
   const Grid& grid_;
-  std::vector<uint8_t> blocked_;  // per cell; empty when nothing is blocked
+  std::shared_ptr<const FreeCellIndex> index_;
   size_t budget_;
   mutable std::shared_mutex mutex_;
   mutable std::unordered_map<Cell, std::unique_ptr<Entry>> rows_;
-  mutable size_t bytes_ = 0;
+  mutable size_t bytes_ = 0, peak_bytes_ = 0;
+  mutable size_t evict_at_ = 0;  // bytes above which the next insertion tries to evict
   mutable std::atomic<uint64_t> clock_{0};
   mutable std::atomic<uint64_t> bfs_count_{0};
+  mutable std::atomic<uint64_t> evictions_{0};
+  mutable std::atomic<uint64_t> over_budget_{0};
 };
 
 }  // namespace gdrhcr
