@@ -1,0 +1,142 @@
+// The per-tick execution layer of the planner node, ROS-free: robot liveness and consistency,
+// planning, reservation, commitment and validation. Unit-tested in test/execution_test.cpp.
+//
+// Two modes:
+// * "adg" (default): an Action Dependency Graph as in Hönig, Kiesel, Tinka, Durham and Ayanian,
+//   "Persistent and Robust Execution of MAPF Schedules in Warehouses" (RA-L 2019), over a rolling
+//   horizon. Every tick the planner (GD-RHCR, its lazy group replans included) plans one more
+//   synchronous step from the robots' *committed end states*; the step is committed: each robot's
+//   new cell is appended to its committed path and to the cell's queue of visits, in plan order.
+//   A robot is commanded its next committed cell (the move is "dispatched") as soon as every robot
+//   that the plan sends through that cell earlier has left it (reported arrival in its next cell);
+//   no lock-step. A dispatched cell stays reserved for the robot until it reports arrival, and a
+//   commitment is never changed by a replan, so any pattern of delays gives no collision, and,
+//   since commitments follow one global plan order with cycles (rotations) turned into waits, no
+//   deadlock. A robot with `commit_horizon` moves committed but not dispatched is immovable for
+//   the planner in that step (the others plan around it).
+// * "lockstep" (the node's behaviour before issue 13, kept for comparison): every tick the planner
+//   plans from the reported cells; a robot still moving is held, the cell it is entering is
+//   reserved (issue 13's fix), and robots that would enter a held robot's cell are held too.
+//
+// Bad robots do not stop the fleet: a robot that never reported (missing) is left out once the
+// caller allows it; a robot that is offline, silent, or inconsistent (a report of a cell another
+// robot holds, or a move nobody commanded) becomes an immovable obstacle at its last known cell,
+// and every cell it may be entering is blocked; the other robots' undispatched commitments are
+// then rebuilt (a "resync"), so nobody waits for a robot that will not move.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "gd_rhcr_planner/deadline_planner.hpp"
+#include "gd_rhcr_planner/fleet.hpp"
+#include "gdrhcr/dist_table.hpp"
+#include "gdrhcr/grid.hpp"
+#include "gdrhcr/validator.hpp"
+
+namespace gd_rhcr_planner {
+
+enum class ExecutionMode { kAdg, kLockstep };
+// "adg" or "lockstep"; throws gdrhcr::ParamError naming the value otherwise.
+ExecutionMode parse_execution_mode(const std::string& name);
+const char* execution_mode_name(ExecutionMode m);
+
+enum class RobotHealth : uint8_t { kOk, kMissing, kOffline, kSilent, kInconsistent };
+const char* robot_health_name(RobotHealth h);
+
+struct ExecutorConfig {
+  ExecutionMode mode = ExecutionMode::kAdg;
+  int commit_horizon = 1;       // ADG: planned moves a robot may hold beyond the one it makes (>= 1)
+  double plan_deadline_s = 0;   // per planner call (DeadlinePlanner); <= 0 waits for the planner
+  size_t dist_budget_bytes = size_t(256) << 20;  // distance table around bad robots
+};
+
+struct TickOutput {
+  bool stepped = false;          // false: no command this tick (skip_reason says why)
+  std::string skip_reason;
+  std::vector<Cell> cells;       // per robot id: its cell as the executor knows it (kNoCell: missing)
+  std::vector<Cell> command;     // per robot id: the cell to be in or head for (kNoCell: no command)
+  std::vector<Cell> end_state;   // per robot id: the end of its commitments (lockstep: its next cell)
+  std::vector<RobotHealth> health;
+  std::vector<int> robot_of_agent;  // planner agent index -> robot id (the planner sees active robots)
+  std::vector<std::vector<Cell>> agent_goals;  // the goals the planner got, per agent
+  bool planner_called = false;
+  DeadlineOutcome outcome;       // of the planner call
+  int held = 0;                  // planned moves turned into waits (immovable robots and robots behind them)
+  int waiting = 0;               // ADG: robots whose next committed move waits for robots ahead of them
+  int dispatched = 0;            // ADG: moves commanded for the first time this tick
+  int resyncs = 0;               // ADG: commitments rebuilt this tick (a robot changed health, slipped)
+  std::string plan_error;        // the planned step was rejected by the validator: nobody got a new move
+  std::vector<std::string> warnings;  // robots that changed health, unexpected reports
+};
+
+class Executor {
+ public:
+  // `dist` is the fleet's shared distance table (no robots blocked); grid and dist outlive this.
+  Executor(const gdrhcr::Grid& grid, const gdrhcr::DistTable& dist, int num_robots, ExecutorConfig cfg);
+
+  // One tick. robots: the fleet's records by id (Fleet::robot); goals: Fleet::fill_goals.
+  // proceed_without_missing: robots that never reported are left out; when false, no step is made
+  // while any robot is missing. The planner must have been built for at least num_robots agents.
+  TickOutput tick(const std::vector<RobotRecord>& robots, const std::vector<std::vector<Cell>>& goals,
+                  DeadlinePlanner& planner, bool proceed_without_missing);
+
+  const ExecutorConfig& config() const { return cfg_; }
+  int num_robots() const { return static_cast<int>(tracks_.size()); }
+  // Introspection (tests, markers): robot r's committed cells not reached yet, in order; the first
+  // is being made when dispatched(r).
+  std::vector<Cell> committed(int r) const;
+  bool dispatched(int r) const { return tracks_[r].dispatched; }
+  Cell cell(int r) const { return tracks_[r].cell; }
+  RobotHealth health(int r) const { return tracks_[r].health; }
+  uint64_t steps() const { return steps_; }            // planned steps so far
+  uint64_t resyncs_total() const { return resyncs_total_; }
+  // ADG invariant check (tests): every robot's visits are queued in its path order and each
+  // cell's queue starts with the robot in it, if any. Empty when fine, else what is wrong.
+  std::string check_invariants() const;
+  // The robots queued to visit cell c, with their state (debugging, tests).
+  std::string debug_queue(Cell c) const;
+
+ private:
+  struct Track {
+    bool active = false;        // has a known cell and is planned (as a robot or an obstacle)
+    RobotHealth health = RobotHealth::kMissing;
+    Cell cell = gdrhcr::kNoCell;
+    std::deque<Cell> path;      // committed cells after `cell`
+    bool dispatched = false;    // path.front() was commanded: reserved until arrival
+    Cell claimed = gdrhcr::kNoCell;  // inconsistent: the cell it reported (blocked)
+    bool unknown_move = false;  // reported moving with no move commanded: its neighbours are blocked
+    Cell last_target = gdrhcr::kNoCell;  // lockstep: target of its last move command, until it arrives
+  };
+
+  void reconcile_adg(const std::vector<RobotRecord>& robots, TickOutput& out);
+  void reconcile_lockstep(const std::vector<RobotRecord>& robots, TickOutput& out);
+  void resync();
+  int dispatch_ready(TickOutput& out);
+  int holder_of(Cell c, int except) const;
+  void add_blocked_cells(int r, std::vector<Cell>& blocked) const;
+  const gdrhcr::DistTable& dist_for(const std::vector<Cell>& obstacles);
+  std::vector<Cell> planner_goals(int r, const std::vector<Cell>& fleet_goals, Cell end) const;
+  void plan_and_commit(const std::vector<std::vector<Cell>>& goals, DeadlinePlanner& planner, TickOutput& out);
+
+  const gdrhcr::Grid& grid_;
+  const gdrhcr::DistTable& dist_;
+  ExecutorConfig cfg_;
+  std::vector<Track> tracks_;
+  std::unordered_map<Cell, std::deque<int>> visits_;  // ADG: robots that will be in a cell, in plan order
+  gdrhcr::StepValidator validator_;
+  std::vector<Cell> obstacle_cells_;  // the cells the current obstacle table blocks
+  std::shared_ptr<const gdrhcr::DistTable> obstacle_dist_;
+  uint64_t steps_ = 0, resyncs_total_ = 0;
+};
+
+// Cycles of robots that would each enter the cell the next one leaves (rotations, and swaps) cannot
+// be executed by robots that do not move in lock-step: their moves become waits (held set). Returns
+// the number of robots put on hold.
+int hold_rotations(const std::vector<Cell>& pos, std::vector<Cell>& next, std::vector<uint8_t>& held);
+
+}  // namespace gd_rhcr_planner

@@ -1,0 +1,456 @@
+// Execution layer: Action Dependency Graph over a rolling horizon (Hönig et al., RA-L 2019) and
+// the older lock-step mode. See include/gd_rhcr_planner/execution.hpp.
+#include "gd_rhcr_planner/execution.hpp"
+
+#include <algorithm>
+#include <map>
+
+#include "gdrhcr/params.hpp"
+
+namespace gd_rhcr_planner {
+
+using gdrhcr::kNoCell;
+
+ExecutionMode parse_execution_mode(const std::string& name) {
+  if (name == "adg") return ExecutionMode::kAdg;
+  if (name == "lockstep") return ExecutionMode::kLockstep;
+  throw gdrhcr::ParamError("~execution must be 'adg' or 'lockstep', not '" + name + "'");
+}
+
+const char* execution_mode_name(ExecutionMode m) { return m == ExecutionMode::kAdg ? "adg" : "lockstep"; }
+
+const char* robot_health_name(RobotHealth h) {
+  switch (h) {
+    case RobotHealth::kOk: return "ok";
+    case RobotHealth::kMissing: return "missing";
+    case RobotHealth::kOffline: return "offline";
+    case RobotHealth::kSilent: return "silent";
+    case RobotHealth::kInconsistent: return "inconsistent";
+  }
+  return "unknown";
+}
+
+Executor::Executor(const gdrhcr::Grid& grid, const gdrhcr::DistTable& dist, int num_robots, ExecutorConfig cfg)
+    : grid_(grid), dist_(dist), cfg_(cfg), tracks_(num_robots), validator_(grid) {
+  if (cfg_.commit_horizon < 1) throw gdrhcr::ParamError("~commit_horizon must be >= 1");
+}
+
+std::vector<Cell> Executor::committed(int r) const {
+  return std::vector<Cell>(tracks_[r].path.begin(), tracks_[r].path.end());
+}
+
+// The robot other than `except` that is in c, is entering c, or claims c; -1 when none.
+int Executor::holder_of(Cell c, int except) const {
+  for (int q = 0; q < num_robots(); ++q) {
+    if (q == except) continue;
+    const Track& t = tracks_[q];
+    if (t.claimed == c) return q;
+    if (!t.active) continue;
+    if (t.cell == c || (t.dispatched && t.path.front() == c)) return q;
+    if (t.unknown_move)
+      for (Cell nb : grid_.neighbours(t.cell))
+        if (nb == c) return q;
+  }
+  return -1;
+}
+
+// Cells a bad robot may be in besides its known cell: the cell it was commanded into (it may be
+// on its way), the cell it claims, or every neighbour when it moves without a command.
+void Executor::add_blocked_cells(int r, std::vector<Cell>& blocked) const {
+  const Track& t = tracks_[r];
+  if (t.dispatched) blocked.push_back(t.path.front());
+  if (t.claimed != kNoCell) blocked.push_back(t.claimed);
+  if (t.unknown_move)
+    for (Cell nb : grid_.neighbours(t.cell)) blocked.push_back(nb);
+}
+
+void Executor::reconcile_adg(const std::vector<RobotRecord>& robots, TickOutput& out) {
+  bool need_resync = false;
+  auto who = [&](int r) { return "robot " + std::to_string(r); };
+  for (int r = 0; r < num_robots(); ++r) {
+    Track& t = tracks_[r];
+    const RobotRecord& rec = robots[r];
+    if (!rec.reported) continue;  // missing: stays out
+    const Cell x = rec.cell;
+    if (!t.active) {  // its first report, or it could not be placed before
+      if (rec.silent) continue;
+      const int other = holder_of(x, r);
+      if (other >= 0) {
+        if (t.health != RobotHealth::kInconsistent || t.claimed != x)
+          out.warnings.push_back(who(r) + " reports cell " + grid_.describe(x) + ", which robot " +
+                                 std::to_string(other) + " holds: not planned (an obstacle there) until it reports a free cell");
+        t.health = RobotHealth::kInconsistent;
+        t.claimed = x;
+        continue;
+      }
+      t = Track{};
+      t.active = true;
+      t.cell = x;
+      t.unknown_move = rec.moving;
+      t.health = rec.moving ? RobotHealth::kInconsistent : rec.reported_offline ? RobotHealth::kOffline : RobotHealth::kOk;
+      if (rec.moving)
+        out.warnings.push_back(who(r) + " first reports while moving: an obstacle until it stops");
+      need_resync = true;
+      continue;
+    }
+    if (rec.silent) {  // no news: it stays where we know it is, and what it may be entering stays held
+      if (t.health != RobotHealth::kSilent) {
+        out.warnings.push_back(who(r) + " is silent: an obstacle at " + grid_.describe(t.cell) +
+                               (t.dispatched ? " and " + grid_.describe(t.path.front()) : std::string()));
+        t.health = RobotHealth::kSilent;
+        need_resync = true;
+      }
+      continue;
+    }
+    RobotHealth h = rec.reported_offline ? RobotHealth::kOffline : RobotHealth::kOk;
+    if (x == t.cell) {
+      t.claimed = kNoCell;
+      if (t.dispatched && rec.reported_offline && !rec.moving) {  // OFFLINE at rest: it will not make the move
+        t.dispatched = false;
+        t.path.clear();
+        need_resync = true;
+      }
+    } else if (t.dispatched && x == t.path.front()) {  // arrival: it has left its cell
+      auto it = visits_.find(t.cell);
+      if (it != visits_.end()) {
+        auto pos = std::find(it->second.begin(), it->second.end(), r);
+        if (pos != it->second.end()) it->second.erase(pos);
+        if (it->second.empty()) visits_.erase(it);
+      }
+      t.cell = x;
+      t.path.pop_front();
+      t.dispatched = false;
+      t.claimed = kNoCell;
+    } else {  // a cell it was not commanded into
+      // A slip (it ended in a free neighbour of where it was or was going) is taken as the truth;
+      // a cell another robot holds, or a jump, is not: the robot is an obstacle at both cells.
+      const int other = holder_of(x, r);
+      const bool reachable = grid_.step_allowed(t.cell, x) || (t.dispatched && grid_.step_allowed(t.path.front(), x));
+      if (other < 0 && reachable) {
+        out.warnings.push_back(who(r) + " reports " + grid_.describe(x) + ", not the cell it was commanded (" +
+                               grid_.describe(t.dispatched ? t.path.front() : t.cell) + "): replanned from there");
+        t.cell = x;
+        t.dispatched = false;
+        t.path.clear();
+        t.claimed = kNoCell;
+        need_resync = true;
+      } else {
+        if (t.claimed != x)
+          out.warnings.push_back(who(r) + " reports cell " + grid_.describe(x) +
+                                 (other >= 0 ? ", which robot " + std::to_string(other) + " holds"
+                                             : std::string(", more than one move from where it was")) +
+                                 ": an obstacle at " + grid_.describe(t.cell) + " and " + grid_.describe(x));
+        t.claimed = x;
+        h = RobotHealth::kInconsistent;
+      }
+    }
+    const bool unknown = rec.moving && !t.dispatched;
+    if (unknown && !t.unknown_move)
+      out.warnings.push_back(who(r) + " is moving without a command: an obstacle around " + grid_.describe(t.cell));
+    if (unknown != t.unknown_move) need_resync = true;
+    t.unknown_move = unknown;
+    if (unknown) h = RobotHealth::kInconsistent;
+    if (h != t.health) {
+      if (h != RobotHealth::kOk) {
+        if (h == RobotHealth::kOffline)
+          out.warnings.push_back(who(r) + " is offline: an obstacle at " + grid_.describe(t.cell));
+      } else {
+        out.warnings.push_back(who(r) + " is back (" + robot_health_name(t.health) + " before)");
+      }
+      t.health = h;
+      need_resync = true;
+    }
+  }
+  if (need_resync) {
+    resync();
+    ++out.resyncs;
+  }
+}
+
+// Drops every commitment that was not dispatched yet and rebuilds the cells' visit queues from
+// what robots are in and what they were commanded into.
+void Executor::resync() {
+  ++resyncs_total_;
+  visits_.clear();
+  for (int r = 0; r < num_robots(); ++r) {
+    Track& t = tracks_[r];
+    if (!t.active) continue;
+    if (t.dispatched) t.path.resize(1);
+    else t.path.clear();
+    visits_[t.cell].push_back(r);
+  }
+  for (int r = 0; r < num_robots(); ++r) {
+    const Track& t = tracks_[r];
+    if (t.active && t.dispatched) visits_[t.path.front()].push_back(r);
+  }
+}
+
+int Executor::dispatch_ready(TickOutput& out) {
+  int n = 0;
+  for (int r = 0; r < num_robots(); ++r) {
+    Track& t = tracks_[r];
+    if (!t.active || t.health != RobotHealth::kOk || t.dispatched || t.path.empty()) continue;
+    auto it = visits_.find(t.path.front());
+    if (it != visits_.end() && !it->second.empty() && it->second.front() == r) {
+      t.dispatched = true;
+      ++n;
+    }
+  }
+  out.dispatched += n;
+  return n;
+}
+
+const gdrhcr::DistTable& Executor::dist_for(const std::vector<Cell>& obstacles) {
+  if (obstacles != obstacle_cells_) {
+    obstacle_cells_ = obstacles;
+    obstacle_dist_.reset();
+    if (!obstacles.empty())
+      obstacle_dist_ = std::make_shared<const gdrhcr::DistTable>(grid_, obstacles, cfg_.dist_budget_bytes);
+  }
+  return obstacle_dist_ ? *obstacle_dist_ : dist_;
+}
+
+// The goals the planner gets for robot r from its committed end state: goals its committed path
+// already passes are dropped (the fleet marks them reached when the robot gets there); an idle
+// robot (its goal is its own cell) is to stay at its end state.
+std::vector<Cell> Executor::planner_goals(int r, const std::vector<Cell>& fleet_goals, Cell end) const {
+  const Track& t = tracks_[r];
+  if (fleet_goals.empty() || (fleet_goals.size() == 1 && fleet_goals[0] == t.cell)) return {end};
+  size_t k = 0;
+  for (Cell c : t.path)
+    if (k + 1 < fleet_goals.size() && c == fleet_goals[k]) ++k;
+  return std::vector<Cell>(fleet_goals.begin() + k, fleet_goals.end());
+}
+
+int hold_rotations(const std::vector<Cell>& pos, std::vector<Cell>& next, std::vector<uint8_t>& held) {
+  const int n = static_cast<int>(pos.size());
+  std::unordered_map<Cell, int> at;
+  at.reserve(n * 2);
+  for (int i = 0; i < n; ++i) at[pos[i]] = i;
+  // succ[i]: the mover whose cell mover i enters (i follows it), else -1.
+  std::vector<int> succ(n, -1);
+  for (int i = 0; i < n; ++i) {
+    if (next[i] == pos[i]) continue;
+    auto it = at.find(next[i]);
+    if (it != at.end() && next[it->second] != pos[it->second]) succ[i] = it->second;
+  }
+  std::vector<uint8_t> state(n, 0);  // 0 new, 1 on the current chain, 2 done
+  int count = 0;
+  std::vector<int> chain;
+  for (int s = 0; s < n; ++s) {
+    if (state[s]) continue;
+    chain.clear();
+    int i = s;
+    while (i >= 0 && state[i] == 0) {
+      state[i] = 1;
+      chain.push_back(i);
+      i = succ[i];
+    }
+    if (i >= 0 && state[i] == 1) {  // a cycle from i to the end of the chain
+      auto from = std::find(chain.begin(), chain.end(), i);
+      for (auto it = from; it != chain.end(); ++it) {
+        held[*it] = 1;
+        next[*it] = pos[*it];
+        ++count;
+      }
+    }
+    for (int c : chain) state[c] = 2;
+  }
+  return count;
+}
+
+void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, DeadlinePlanner& planner,
+                               TickOutput& out) {
+  const bool adg = cfg_.mode == ExecutionMode::kAdg;
+  std::vector<int>& robot_of = out.robot_of_agent;
+  robot_of.clear();
+  for (int r = 0; r < num_robots(); ++r)
+    if (tracks_[r].active) robot_of.push_back(r);
+  const int na = static_cast<int>(robot_of.size());
+  if (na == 0) return;
+  std::vector<Cell> positions(na), blocked, obstacles;
+  std::vector<std::vector<Cell>>& agent_goals = out.agent_goals;
+  agent_goals.assign(na, {});
+  std::vector<uint8_t> immovable(na, 0);
+  for (int a = 0; a < na; ++a) {
+    const int r = robot_of[a];
+    const Track& t = tracks_[r];
+    const bool ok = t.health == RobotHealth::kOk;
+    Cell end = t.cell;
+    if (adg && ok && !t.path.empty()) end = t.path.back();
+    positions[a] = end;
+    if (!ok) {
+      immovable[a] = 1;
+      obstacles.push_back(t.cell);
+      add_blocked_cells(r, blocked);
+      agent_goals[a] = {t.cell};
+      continue;
+    }
+    if (adg) {
+      const int pending = static_cast<int>(t.path.size()) - (t.dispatched ? 1 : 0);
+      immovable[a] = pending >= cfg_.commit_horizon;
+      agent_goals[a] = planner_goals(r, goals[r], end);
+    } else {
+      // Lock-step: a robot still moving is held, and the cell it enters is reserved (issue 13).
+      immovable[a] = t.unknown_move;
+      if (t.unknown_move && t.last_target != kNoCell && t.last_target != t.cell) blocked.push_back(t.last_target);
+      agent_goals[a] = goals[r].empty() ? std::vector<Cell>{t.cell} : goals[r];
+    }
+  }
+  for (const Track& t : tracks_)
+    if (!t.active && t.claimed != kNoCell) blocked.push_back(t.claimed);
+  obstacles.insert(obstacles.end(), blocked.begin(), blocked.end());
+  std::sort(obstacles.begin(), obstacles.end());
+  obstacles.erase(std::unique(obstacles.begin(), obstacles.end()), obstacles.end());
+  const gdrhcr::DistTable& dist = dist_for(obstacles);
+
+  std::vector<uint8_t> movers_fixed(na, 0);  // the planner's immovable agents: bad robots, full queues
+  gdrhcr::WorldView world{grid_, dist, static_cast<int>(steps_), positions, agent_goals};
+  bool any_immovable = std::any_of(immovable.begin(), immovable.end(), [](uint8_t v) { return v != 0; });
+  if (any_immovable) world.immovable = &immovable;
+  std::vector<Cell> next = positions;
+  out.outcome = planner.step(world, next, cfg_.plan_deadline_s, obstacle_dist_);
+  out.planner_called = true;
+  std::vector<uint8_t> held = immovable;
+  hold_cascade(grid_, positions, next, held, blocked);
+  if (adg && hold_rotations(positions, next, held) > 0) hold_cascade(grid_, positions, next, held, blocked);
+  if (auto violation = validator_.check(positions, next)) {
+    out.plan_error = violation->describe(grid_, static_cast<int>(steps_));
+    next = positions;
+  }
+  for (int a = 0; a < na; ++a) out.held += held[a] != 0;
+  ++steps_;
+  for (int a = 0; a < na; ++a) {
+    const int r = robot_of[a];
+    Track& t = tracks_[r];
+    if (adg) {
+      if (next[a] == positions[a]) continue;
+      t.path.push_back(next[a]);
+      visits_[next[a]].push_back(r);
+    } else {
+      out.command[r] = next[a];
+      out.end_state[r] = next[a];
+      if (next[a] != t.cell) t.last_target = next[a];
+    }
+  }
+}
+
+void Executor::reconcile_lockstep(const std::vector<RobotRecord>& robots, TickOutput& out) {
+  for (int r = 0; r < num_robots(); ++r) {
+    Track& t = tracks_[r];
+    const RobotRecord& rec = robots[r];
+    if (!rec.reported) continue;
+    const RobotHealth h = rec.silent ? RobotHealth::kSilent : rec.reported_offline ? RobotHealth::kOffline : RobotHealth::kOk;
+    if (h != t.health && t.active && (h != RobotHealth::kOk))
+      out.warnings.push_back("robot " + std::to_string(r) + " is " + robot_health_name(h) + ": an obstacle at " +
+                             grid_.describe(rec.cell));
+    t.active = true;
+    t.health = h;
+    t.cell = rec.cell;
+    // A robot reported moving keeps the cell of its last move command reserved until it stops
+    // (unknown_move marks "moving" in this mode); a silent robot keeps it reserved too.
+    t.unknown_move = rec.moving && !rec.silent;
+    if (!rec.moving && !rec.silent) t.last_target = kNoCell;
+    t.dispatched = rec.silent && t.last_target != kNoCell && t.last_target != t.cell;
+    t.path.clear();
+    if (t.dispatched) t.path.push_back(t.last_target);
+  }
+}
+
+TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vector<std::vector<Cell>>& goals,
+                          DeadlinePlanner& planner, bool proceed_without_missing) {
+  TickOutput out;
+  const int n = num_robots();
+  if (static_cast<int>(robots.size()) != n || static_cast<int>(goals.size()) != n) {
+    out.skip_reason = "executor: " + std::to_string(robots.size()) + " robot records and " +
+                      std::to_string(goals.size()) + " goal lists for " + std::to_string(n) + " robots";
+    return out;
+  }
+  int missing = 0, reported = 0;
+  for (const RobotRecord& rec : robots) {
+    missing += !rec.reported;
+    reported += rec.reported;
+  }
+  if (reported == 0 || (missing > 0 && !proceed_without_missing)) {
+    out.skip_reason = std::to_string(missing) + " robots have not reported a state yet";
+    return out;
+  }
+  out.command.assign(n, kNoCell);
+  out.end_state.assign(n, kNoCell);
+  if (cfg_.mode == ExecutionMode::kAdg) {
+    reconcile_adg(robots, out);
+    dispatch_ready(out);
+    plan_and_commit(goals, planner, out);
+    dispatch_ready(out);
+  } else {
+    reconcile_lockstep(robots, out);
+    std::map<Cell, int> at;
+    for (int r = 0; r < n; ++r) {
+      if (!tracks_[r].active) continue;
+      auto [it, fresh] = at.emplace(tracks_[r].cell, r);
+      if (!fresh) {
+        out.skip_reason = "robot states inconsistent: robots " + std::to_string(it->second) + " and " +
+                          std::to_string(r) + " both report cell " + grid_.describe(tracks_[r].cell);
+        out.command.clear();
+        out.end_state.clear();
+        return out;
+      }
+    }
+    plan_and_commit(goals, planner, out);
+  }
+  out.stepped = true;
+  out.cells.assign(n, kNoCell);
+  out.health.assign(n, RobotHealth::kMissing);
+  for (int r = 0; r < n; ++r) {
+    const Track& t = tracks_[r];
+    out.health[r] = t.health;
+    if (!t.active) continue;
+    out.cells[r] = t.cell;
+    if (cfg_.mode == ExecutionMode::kAdg) {
+      out.command[r] = t.dispatched ? t.path.front() : t.cell;
+      out.end_state[r] = t.path.empty() ? t.cell : t.path.back();
+      if (t.health == RobotHealth::kOk && !t.dispatched && !t.path.empty()) ++out.waiting;
+    } else if (out.command[r] == kNoCell) {
+      out.command[r] = t.cell;
+      out.end_state[r] = t.cell;
+    }
+  }
+  return out;
+}
+
+std::string Executor::debug_queue(Cell c) const {
+  std::string s;
+  auto it = visits_.find(c);
+  if (it == visits_.end()) return "no visits";
+  for (int r : it->second) {
+    const Track& t = tracks_[r];
+    s += "robot " + std::to_string(r) + " at " + grid_.describe(t.cell) + " " + robot_health_name(t.health) +
+         (t.dispatched ? " dispatched" : "") + " path";
+    for (Cell p : t.path) s += " " + grid_.describe(p);
+    s += "; ";
+  }
+  return s;
+}
+
+std::string Executor::check_invariants() const {
+  std::string err;
+  for (int r = 0; r < num_robots() && err.empty(); ++r) {
+    const Track& t = tracks_[r];
+    if (!t.active) continue;
+    auto it = visits_.find(t.cell);
+    if (it == visits_.end() || it->second.empty() || it->second.front() != r)
+      err = "robot " + std::to_string(r) + " is not first in the queue of its cell " + grid_.describe(t.cell);
+    Cell prev = t.cell;
+    for (Cell c : t.path) {
+      if (!grid_.step_allowed(prev, c) || c == prev)
+        err = "robot " + std::to_string(r) + " has a committed move " + grid_.describe(prev) + " -> " + grid_.describe(c);
+      auto q = visits_.find(c);
+      if (q == visits_.end() || std::find(q->second.begin(), q->second.end(), r) == q->second.end())
+        err = "robot " + std::to_string(r) + " has no visit queued for " + grid_.describe(c);
+      prev = c;
+    }
+  }
+  return err;
+}
+
+}  // namespace gd_rhcr_planner

@@ -1,0 +1,432 @@
+// Executor (execution.hpp): the lock-step reservation fix of issue 13, rotations, and the Action
+// Dependency Graph under random delays: simulated robots that start a commanded move at once
+// (no interlock), pause for random delays (LoRR 2026 style: p_delay per tick, 1..D ticks), move
+// at different speeds, and occupy both cells while moving. Over many seeds: no two robots ever
+// share a cell, every command is a wait or a move to a free neighbour, a command to a moving
+// robot names its destination, and after the delays stop every robot reaches goals again (no
+// deadlock). Bad robots (missing, silent, offline, inconsistent, slipping) leave the rest moving.
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <random>
+
+#include "gd_rhcr_planner/execution.hpp"
+#include "gd_rhcr_planner/map_loader.hpp"
+#include "gdrhcr/planner.hpp"
+
+using namespace gd_rhcr_planner;
+using gdrhcr::Cell;
+using gdrhcr::Grid;
+using gdrhcr::kNoCell;
+
+namespace {
+
+// Plans whatever the test's function says.
+class FnPlanner : public gdrhcr::Planner {
+ public:
+  std::function<void(const gdrhcr::WorldView&, std::vector<Cell>&)> fn;
+  std::string name() const override { return "fn"; }
+  gdrhcr::StepReport plan_step(const gdrhcr::WorldView& w, std::vector<Cell>& next) override {
+    next = w.positions;
+    if (fn) fn(w, next);
+    return {true, 0};
+  }
+  nlohmann::json params() const override { return nlohmann::json::object(); }
+};
+
+std::unique_ptr<DeadlinePlanner> make_fn_planner(const Grid& g, int n, FnPlanner** out) {
+  auto p = std::make_unique<FnPlanner>();
+  *out = p.get();
+  gdrhcr::Params none;
+  return std::make_unique<DeadlinePlanner>(std::move(p), gdrhcr::make_planner("pibt", none, g, n, 1));
+}
+
+RobotRecord at(const Grid& g, int x, int y, bool moving = false) {
+  RobotRecord r;
+  r.reported = true;
+  r.cell = g.cell(x, y);
+  r.moving = moving;
+  return r;
+}
+
+std::vector<std::vector<Cell>> stay_goals(const std::vector<RobotRecord>& robots) {
+  std::vector<std::vector<Cell>> goals;
+  for (auto& r : robots) goals.push_back({r.cell});
+  return goals;
+}
+
+}  // namespace
+
+// Issue 13, fix 1: robot 0 was commanded into (2,0) and is still moving; the planner, which sees
+// robot 0 at (1,0), sends robot 1 into (2,0). Before the fix only a silent robot's target was
+// reserved and robot 1 got the command; now robot 1 is held.
+TEST(ExecutorLockstep, AMovingRobotsDestinationIsReservedUntilItArrives) {
+  const Grid g = Grid::from_rows({"......"});
+  gdrhcr::DistTable dist(g);
+  FnPlanner* fn;
+  auto planner = make_fn_planner(g, 2, &fn);
+  ExecutorConfig cfg;
+  cfg.mode = ExecutionMode::kLockstep;
+  Executor ex(g, dist, 2, cfg);
+  std::vector<RobotRecord> robots{at(g, 1, 0), at(g, 3, 0)};
+  fn->fn = [&](const gdrhcr::WorldView&, std::vector<Cell>& next) { next[0] = g.cell(2, 0); };
+  auto out = ex.tick(robots, stay_goals(robots), *planner, false);
+  ASSERT_TRUE(out.stepped);
+  EXPECT_EQ(out.command[0], g.cell(2, 0));
+  robots[0].moving = true;  // on its way, still reporting its source cell
+  fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
+    EXPECT_EQ(w.positions[0], g.cell(1, 0));
+    next[1] = g.cell(2, 0);  // valid from the positions the planner sees
+  };
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  ASSERT_TRUE(out.stepped);
+  EXPECT_EQ(out.command[1], g.cell(3, 0)) << "robot 1 was sent into the cell robot 0 is entering";
+  EXPECT_EQ(out.command[0], g.cell(1, 0));  // held: it finishes its move, then waits
+  // Arrived: the cell is robot 0's now, and robot 1 may follow once robot 0 moves on.
+  robots[0] = at(g, 2, 0);
+  fn->fn = [&](const gdrhcr::WorldView&, std::vector<Cell>& next) { next[1] = g.cell(2, 0); };
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.command[1], g.cell(3, 0));  // (2,0) is occupied by robot 0, which stays
+}
+
+// The same situation in ADG mode: robot 1's move into (2,0) is committed after robot 0's visit,
+// and only dispatched once robot 0 has left (2,0) again.
+TEST(ExecutorAdg, ACellIsEnteredOnlyAfterTheRobotsBeforeHaveLeftIt) {
+  const Grid g = Grid::from_rows({"......"});
+  gdrhcr::DistTable dist(g);
+  FnPlanner* fn;
+  auto planner = make_fn_planner(g, 2, &fn);
+  Executor ex(g, dist, 2, ExecutorConfig{});
+  std::vector<RobotRecord> robots{at(g, 1, 0), at(g, 3, 0)};
+  // Step 1: robot 0 -> (2,0). Step 2: robot 0 -> (1,0) back, robot 1 -> (2,0) (follows it out).
+  int step = 0;
+  fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
+    if (step == 0) next[0] = g.cell(2, 0);
+    if (step == 1) {
+      EXPECT_EQ(w.positions[0], g.cell(2, 0));  // planned from the committed end state
+      next[0] = g.cell(1, 0);
+      next[1] = g.cell(2, 0);
+    }
+    ++step;
+  };
+  auto out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.command[0], g.cell(2, 0));
+  robots[0].moving = true;  // a slow move: still on its way at the next tick
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.command[0], g.cell(2, 0)) << "a moving robot is told its destination";
+  EXPECT_EQ(out.command[1], g.cell(3, 0)) << "robot 1 must wait for robot 0 to leave (2,0)";
+  EXPECT_EQ(out.waiting, 1);
+  EXPECT_EQ(ex.check_invariants(), "");
+  robots[0] = at(g, 2, 0);  // arrived; its move back to (1,0) is dispatched, robot 1 still waits
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.command[0], g.cell(1, 0));
+  EXPECT_EQ(out.command[1], g.cell(3, 0));
+  robots[0] = at(g, 1, 0);  // left (2,0): now robot 1 goes
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.command[1], g.cell(2, 0));
+  EXPECT_EQ(ex.check_invariants(), "");
+}
+
+TEST(HoldRotations, ACycleOfFollowersWaitsAndAChainDoesNot) {
+  const Grid g = Grid::from_rows({"...", "..."});
+  // Four robots rotating around the 2x2 block on the left: each enters the cell the next leaves.
+  std::vector<Cell> pos{g.cell(0, 0), g.cell(1, 0), g.cell(1, 1), g.cell(0, 1)};
+  std::vector<Cell> next{g.cell(1, 0), g.cell(1, 1), g.cell(0, 1), g.cell(0, 0)};
+  std::vector<uint8_t> held(4, 0);
+  EXPECT_EQ(hold_rotations(pos, next, held), 4);
+  EXPECT_EQ(next, pos);
+  // A chain whose head enters a free cell is not a cycle.
+  std::vector<Cell> cpos{g.cell(0, 0), g.cell(1, 0), g.cell(2, 0)};
+  std::vector<Cell> cnext{g.cell(1, 0), g.cell(2, 0), g.cell(2, 1)};
+  std::vector<uint8_t> cheld(3, 0);
+  EXPECT_EQ(hold_rotations(cpos, cnext, cheld), 0);
+  EXPECT_EQ(cheld, std::vector<uint8_t>(3, 0));
+  // A swap is a 2-cycle.
+  std::vector<Cell> p2{g.cell(0, 0), g.cell(1, 0)}, n2{g.cell(1, 0), g.cell(0, 0)};
+  std::vector<uint8_t> h2(2, 0);
+  EXPECT_EQ(hold_rotations(p2, n2, h2), 2);
+}
+
+TEST(Executor, BadModeAndHorizonAreRejected) {
+  EXPECT_THROW(parse_execution_mode("async"), gdrhcr::ParamError);
+  EXPECT_EQ(parse_execution_mode("lockstep"), ExecutionMode::kLockstep);
+  const Grid g = Grid::from_rows({"..."});
+  gdrhcr::DistTable dist(g);
+  ExecutorConfig cfg;
+  cfg.commit_horizon = 0;
+  EXPECT_THROW(Executor(g, dist, 1, cfg), gdrhcr::ParamError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// A simulated fleet for the randomised tests.
+
+namespace {
+
+constexpr int kSub = 10;  // substeps per tick
+
+struct SimRobot {
+  Cell cell = kNoCell, dst = kNoCell;
+  bool moving = false;
+  int left = 0;         // substeps of the current move still to go
+  int speed = kSub;     // substeps per move
+  int delay = 0;        // substeps of delay left
+  bool missing = false, silent = false, offline = false;
+  Cell fake = kNoCell;  // reports this cell instead of its own (an inconsistent report)
+  Cell goal = kNoCell;
+  int goals_reached = 0;
+  int moves = 0;
+};
+
+struct SimResult {
+  int goals = 0, goals_tail = 0, ticks = 0;
+  std::vector<int> moves_tail;  // moves per robot after the delays stopped
+  int max_wait_tail = 0;        // longest stretch a healthy robot waited on a committed move, tail
+  std::vector<std::vector<int>> health_ticks;  // per robot, ticks spent in each RobotHealth
+};
+
+class FleetSim {
+ public:
+  FleetSim(const Grid& g, int n, uint64_t seed) : g_(g), rng_(seed), robots_(n) {
+    std::vector<Cell> free = g.free_cells();
+    std::shuffle(free.begin(), free.end(), rng_);
+    std::uniform_int_distribution<int> speed(3, 14);  // 0.3 .. 1.4 ticks per move
+    for (int i = 0; i < n; ++i) {
+      robots_[i].cell = free[i];
+      robots_[i].speed = speed(rng_);
+      robots_[i].goal = random_cell();
+    }
+  }
+  Cell random_cell() {
+    const auto& f = g_.free_cells();
+    return f[std::uniform_int_distribution<size_t>(0, f.size() - 1)(rng_)];
+  }
+  std::vector<SimRobot>& robots() { return robots_; }
+
+  std::vector<RobotRecord> records() const {
+    std::vector<RobotRecord> out(robots_.size());
+    for (size_t i = 0; i < robots_.size(); ++i) {
+      const SimRobot& s = robots_[i];
+      if (s.missing) continue;
+      out[i].reported = true;
+      out[i].cell = s.fake != kNoCell ? s.fake : s.cell;
+      out[i].moving = s.moving;
+      out[i].reported_offline = s.offline;
+      out[i].offline = s.offline || s.silent;
+      out[i].silent = s.silent;
+    }
+    return out;
+  }
+  // Fills goals and counts goals reached (a robot at rest on its goal gets a new one).
+  std::vector<std::vector<Cell>> goals(int& reached) {
+    std::vector<std::vector<Cell>> out(robots_.size());
+    for (size_t i = 0; i < robots_.size(); ++i) {
+      SimRobot& s = robots_[i];
+      if (!s.moving && s.cell == s.goal && !s.missing && !s.silent && !s.offline) {
+        ++reached;
+        ++s.goals_reached;
+        s.goal = random_cell();
+      }
+      out[i] = {s.offline || s.silent ? s.cell : s.goal};
+    }
+    return out;
+  }
+  // Applies the commands (checks them) and runs one tick of motion with delays.
+  void execute(const TickOutput& out, double p_delay, int max_delay_ticks) {
+    std::uniform_real_distribution<double> u(0, 1);
+    std::uniform_int_distribution<int> d(1, std::max(1, max_delay_ticks));
+    for (size_t i = 0; i < robots_.size(); ++i) {
+      SimRobot& s = robots_[i];
+      if (s.missing || s.silent) continue;
+      if (s.delay == 0 && p_delay > 0 && u(rng_) < p_delay) s.delay = d(rng_) * kSub;
+      const Cell c = out.command[i];
+      if (c == kNoCell) continue;
+      if (s.moving) {
+        ASSERT_EQ(c, s.dst) << "robot " << i << " is moving to " << g_.describe(s.dst) << " but was commanded "
+                            << g_.describe(c);
+        continue;
+      }
+      if (s.offline || s.fake != kNoCell) continue;  // will not move
+      if (c == s.cell || s.delay > 0) continue;
+      ASSERT_TRUE(g_.step_allowed(s.cell, c)) << "robot " << i << ": " << g_.describe(s.cell) << " -> " << g_.describe(c);
+      s.moving = true;
+      s.dst = c;
+      s.left = s.speed;
+      ++s.moves;
+    }
+    for (int k = 0; k < kSub; ++k) {
+      for (SimRobot& s : robots_) {
+        if (s.silent) continue;
+        if (s.delay > 0) {
+          --s.delay;
+          continue;
+        }
+        if (s.moving && --s.left <= 0) {
+          s.cell = s.dst;
+          s.moving = false;
+        }
+      }
+      check_physical();
+      if (::testing::Test::HasFatalFailure()) return;
+    }
+  }
+  // No cell holds two robots; a moving robot holds both its cells.
+  void check_physical() {
+    std::unordered_map<Cell, int> at;
+    for (size_t i = 0; i < robots_.size(); ++i) {
+      const SimRobot& s = robots_[i];
+      if (s.missing) continue;
+      for (Cell c : {s.cell, s.moving ? s.dst : kNoCell}) {
+        if (c == kNoCell) continue;
+        auto [it, fresh] = at.emplace(c, static_cast<int>(i));
+        if (!fresh) collision_cell = c;
+        ASSERT_TRUE(fresh) << "robots " << it->second << " and " << i << " share cell " << g_.describe(c);
+      }
+    }
+  }
+
+  Cell collision_cell = kNoCell;
+
+ private:
+  const Grid& g_;
+  std::mt19937_64 rng_;
+  std::vector<SimRobot> robots_;
+};
+
+const Grid& small_warehouse() {
+  static const LoadedMap m = load_map(std::string(GD_RHCR_MAPS_DIR) + "/warehouse_small.yaml", 1.0);
+  return m.grid;
+}
+
+// Runs `ticks` ticks with delays, then `tail` ticks without.
+SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int ticks, int tail, double p_delay,
+                    int max_delay, const std::function<void(int, FleetSim&)>& faults = nullptr,
+                    ExecutionMode mode = ExecutionMode::kAdg) {
+  const Grid& g = small_warehouse();
+  gdrhcr::DistTable dist(g);
+  gdrhcr::Params params, none;
+  if (planner_name == "gd-rhcr") params.set("timeout", "1"), params.set("node-budget", "2000");
+  DeadlinePlanner planner(gdrhcr::make_planner(planner_name, params, g, n, seed),
+                          gdrhcr::make_planner("pibt", none, g, n, seed));
+  ExecutorConfig cfg;
+  cfg.mode = mode;
+  Executor ex(g, dist, n, cfg);
+  FleetSim sim(g, n, seed);
+  SimResult res;
+  res.moves_tail.assign(n, 0);
+  res.health_ticks.assign(n, std::vector<int>(5, 0));
+  std::vector<int> wait_run(n, 0);
+  for (int t = 0; t < ticks + tail; ++t) {
+    if (faults) faults(t, sim);
+    if (t == ticks) std::fill(wait_run.begin(), wait_run.end(), 0);  // the tail counts waits that start in it
+    int reached = 0;
+    auto goals = sim.goals(reached);
+    res.goals += reached;
+    if (t >= ticks) res.goals_tail += reached;
+    auto out = ex.tick(sim.records(), goals, planner, true);
+    EXPECT_TRUE(out.stepped) << out.skip_reason;
+    EXPECT_EQ(out.plan_error, "") << "seed " << seed << " tick " << t;
+    if (mode == ExecutionMode::kAdg) {
+      const std::string inv = ex.check_invariants();
+      EXPECT_EQ(inv, "") << "seed " << seed << " tick " << t;
+      if (!inv.empty()) return res;
+    }
+    std::vector<int> before(n);
+    for (int i = 0; i < n; ++i) before[i] = sim.robots()[i].moves;
+    sim.execute(out, t < ticks ? p_delay : 0.0, max_delay);
+    if (::testing::Test::HasFatalFailure()) {
+      ADD_FAILURE() << "planner " << planner_name << " seed " << seed << " tick " << t << " queue at the collision: "
+                    << (sim.collision_cell != kNoCell ? ex.debug_queue(sim.collision_cell) : std::string("-"));
+      return res;
+    }
+    for (int i = 0; i < n; ++i) {
+      ++res.health_ticks[i][static_cast<int>(out.health[i])];
+      const int moved = sim.robots()[i].moves - before[i];
+      if (t >= ticks) res.moves_tail[i] += moved;
+      const bool waits = mode == ExecutionMode::kAdg && out.health[i] == RobotHealth::kOk && !ex.committed(i).empty() &&
+                         !ex.dispatched(i);
+      wait_run[i] = waits ? wait_run[i] + 1 : 0;
+      if (getenv("EXEC_DEBUG") && wait_run[i] == 25) {
+        const Cell c = ex.committed(i)[0];
+        fprintf(stderr, "t=%d robot %d at %s waits to enter %s (%s)\n", t, i, small_warehouse().describe(ex.cell(i)).c_str(),
+                small_warehouse().describe(c).c_str(), ex.debug_queue(c).c_str());
+      }
+      if (t >= ticks) res.max_wait_tail = std::max(res.max_wait_tail, wait_run[i]);
+    }
+    ++res.ticks;
+  }
+  return res;
+}
+
+}  // namespace
+
+// The property of issue 13: any delay pattern, no collision, and no deadlock. 40 seeds with PIBT,
+// 30 robots on the 32x17 warehouse crop, p_delay 0.05 per tick (5x the benchmark's), delays of
+// 1..20 ticks, speeds 0.3..1.4 ticks per move; then 60 ticks without delays, in which every robot
+// moves and the fleet reaches goals, and no robot waits long on a committed move.
+TEST(ExecutorAdg, RandomDelaysNeverCollideNorDeadlock_Pibt) {
+  for (uint64_t seed = 1; seed <= 40; ++seed) {
+    const SimResult r = run_fleet("pibt", 30, seed, 150, 60, 0.05, 20);
+    if (HasFailure()) return;
+    EXPECT_GT(r.goals_tail, 0) << "seed " << seed;
+    EXPECT_LE(r.max_wait_tail, 30) << "seed " << seed << ": a robot waited " << r.max_wait_tail
+                                   << " ticks on a committed move without delays";
+  }
+}
+
+// The same with GD-RHCR (its cached group plans must follow the committed end states).
+TEST(ExecutorAdg, RandomDelaysNeverCollideNorDeadlock_GdRhcr) {
+  for (uint64_t seed = 1; seed <= 8; ++seed) {
+    const SimResult r = run_fleet("gd-rhcr", 30, seed, 120, 60, 0.05, 20);
+    if (HasFailure()) return;
+    EXPECT_GT(r.goals_tail, 0) << "seed " << seed;
+    EXPECT_LE(r.max_wait_tail, 30) << "seed " << seed;
+  }
+}
+
+// Bad robots: robot 0 never reports (not on the floor), robot 1 falls silent mid-move for good,
+// robot 2 goes offline at tick 40 and comes back at 90, robot 3 reports another robot's cell,
+// more than one move away, for ten ticks (then its own again), robot 5 slips into a free neighbour. The rest keeps moving and
+// reaching goals, with delays, and nobody ever shares a cell with a robot (the silent one counts
+// as being in both cells of its move).
+TEST(ExecutorAdg, BadRobotsBecomeObstaclesAndTheRestKeepsMoving) {
+  for (uint64_t seed = 1; seed <= 10; ++seed) {
+    const Grid& g = small_warehouse();
+    int fake_from = -1;
+    auto faults = [&](int t, FleetSim& sim) {
+      auto& r = sim.robots();
+      if (t == 0) r[0].missing = true;
+      if (t == 30 && !r[1].silent) r[1].silent = true;
+      if (t == 40) r[2].offline = true;
+      if (t == 90) r[2].offline = false;
+      // From the first tick >= 50 at which it is at rest, for ten ticks, robot 3 reports the cell of
+      // a robot more than one move away.
+      if (t >= 50 && fake_from < 0 && !r[3].moving)
+        for (int j = 4; j < 24 && r[3].fake == kNoCell; ++j)
+          if (!r[j].moving && !g.step_allowed(r[3].cell, r[j].cell)) r[3].fake = r[j].cell, fake_from = t;
+      if (fake_from >= 0 && t == fake_from + 10) r[3].fake = kNoCell;
+      if (t == 70 && !r[5].moving && r[5].delay == 0) {  // slips: ends in a free neighbour nobody holds
+        for (Cell nb : g.neighbours(r[5].cell)) {
+          bool held = false;
+          for (auto& o : r)
+            held |= !o.missing && (o.cell == nb || (o.moving && o.dst == nb));
+          if (!held) {
+            r[5].cell = nb;
+            break;
+          }
+        }
+      }
+    };
+    const SimResult res = run_fleet("pibt", 24, seed, 150, 60, 0.02, 20, faults);
+    if (HasFailure()) return;
+    EXPECT_GT(res.goals_tail, 0) << "seed " << seed;
+    int movers = 0;
+    for (int i = 2; i < 24; ++i) movers += res.moves_tail[i] > 0;
+    EXPECT_GE(movers, 18) << "seed " << seed << ": the healthy robots should keep moving";
+    EXPECT_EQ(res.moves_tail[1], 0);
+    // Each fault was seen as such (the test is not vacuous).
+    EXPECT_EQ(res.health_ticks[0][int(RobotHealth::kMissing)], res.ticks);
+    EXPECT_GT(res.health_ticks[1][int(RobotHealth::kSilent)], 100);
+    EXPECT_GE(res.health_ticks[2][int(RobotHealth::kOffline)], 40);
+    EXPECT_GT(res.health_ticks[3][int(RobotHealth::kInconsistent)], 0) << "seed " << seed;
+  }
+}
