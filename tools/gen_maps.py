@@ -20,6 +20,18 @@ adjacent rooms gets one opening of OPENING cells at its middle. The outer frame 
 openings. room-32-32-var1 = room-32-32-4 with 1-cell openings; room-64-64-var1 / var2 =
 room-64-64-8 with 1-cell / 2-cell openings.
 
+LoRR-like warehouse, `lorr_warehouse(width, height, shelf_len, shelf_depth, aisle_x, aisle_y, side,
+top)`: a floor the size of the League of Robot Runners' large warehouse (140 rows x 500 columns)
+with our own layout rule:
+  - a field of shelf blocks, each SHELF_LEN cells long and SHELF_DEPTH rows deep (`@`),
+    AISLE_X free columns between blocks in a row and AISLE_Y free rows between block rows;
+  - SIDE free columns left and right of the field (the workstation zones) and TOP free rows
+    above and below it; the sizes must add up to the map exactly, else ValueError;
+  - `E` (emitter / workstation, free) on the map's leftmost and rightmost columns at odd rows;
+  - `S` (service point, free) on every free cell directly above or below a shelf block.
+`E` and `S` are free cells in LoRR's format and in ours. lorr-warehouse-140-500 =
+lorr_warehouse(500, 140, 10, 2, 2, 1, 5, 3): 41 x 45 blocks, 33,100 free cells.
+
 Writes MovingAI .map files; sortation maps also get `<name>.pickups` and `<name>.deliveries`
 ("x y" per line), which gdrhcr_sim picks up for --tasks mapd.
 """
@@ -36,7 +48,7 @@ def write_map(path, rows, source):
         for r in rows:
             f.write("".join(r) + "\n")
     print("wrote %s (%dx%d, %d free) from %s" % (path, len(rows[0]), len(rows),
-                                                   sum(r.count(".") for r in rows), source))
+                                                   sum(len(r) - r.count("@") - r.count("T") for r in rows), source))
 
 
 def write_cells(path, cells, what):
@@ -78,6 +90,29 @@ def sortation(name):
         pickups.add((0, y))
         pickups.add((width - 1, y))
     return rows, sorted(pickups), deliveries
+
+
+def lorr_warehouse(width, height, shelf_len, shelf_depth, aisle_x, aisle_y, side, top):
+    nx, rx = divmod(width - 2 * side + aisle_x, shelf_len + aisle_x)
+    ny, ry = divmod(height - 2 * top + aisle_y, shelf_depth + aisle_y)
+    if rx or ry or nx < 1 or ny < 1:
+        raise ValueError("lorr_warehouse: %d x %d does not fit whole blocks of %d x %d with aisles %d/%d, "
+                         "side %d, top %d" % (width, height, shelf_len, shelf_depth, aisle_x, aisle_y, side, top))
+    rows = [["."] * width for _ in range(height)]
+    for by in range(ny):
+        y0 = top + by * (shelf_depth + aisle_y)
+        for bx in range(nx):
+            x0 = side + bx * (shelf_len + aisle_x)
+            for y in range(y0, y0 + shelf_depth):
+                for x in range(x0, x0 + shelf_len):
+                    rows[y][x] = "@"
+    for y in range(height):
+        for x in range(width):
+            if rows[y][x] == "." and any(0 <= ny_ < height and rows[ny_][x] == "@" for ny_ in (y - 1, y + 1)):
+                rows[y][x] = "S"
+    for y in range(1, height, 2):
+        rows[y][0] = rows[y][width - 1] = "E"
+    return rows
 
 
 def read_movingai(path):
@@ -126,7 +161,7 @@ def uniform_rooms(src_rows, opening):
 
 
 def connected(rows):
-    free = [(x, y) for y, r in enumerate(rows) for x, c in enumerate(r) if c == "."]
+    free = [(x, y) for y, r in enumerate(rows) for x, c in enumerate(r) if c not in "@T"]
     if not free:
         return False
     seen = {free[0]}
@@ -134,7 +169,7 @@ def connected(rows):
     while q:
         x, y = q.popleft()
         for nx, ny in ((x + 1, y), (x - 1, y), (x, y + 1), (x, y - 1)):
-            if 0 <= ny < len(rows) and 0 <= nx < len(rows[0]) and rows[ny][nx] == "." and (nx, ny) not in seen:
+            if 0 <= ny < len(rows) and 0 <= nx < len(rows[0]) and rows[ny][nx] not in "@T" and (nx, ny) not in seen:
                 seen.add((nx, ny))
                 q.append((nx, ny))
     return len(seen) == len(free)
@@ -161,6 +196,10 @@ def main():
         if not connected(rows):
             sys.exit("generated %s is not connected" % alias)
         write_map(os.path.join(d, alias + ".map"), rows, "%s, %d-cell openings" % (src, opening))
+    rows = lorr_warehouse(500, 140, 10, 2, 2, 1, 5, 3)
+    if not connected(rows):
+        sys.exit("generated lorr-warehouse-140-500 is not connected")
+    write_map(os.path.join(d, "lorr-warehouse-140-500.map"), rows, "lorr_warehouse(500, 140, 10, 2, 2, 1, 5, 3)")
 
 
 if __name__ == "__main__":
