@@ -56,6 +56,67 @@ std::unique_ptr<TaskStream> RandomNavigationStream::clone_fresh() const {
   return std::make_unique<RandomNavigationStream>(grid_, seed_);
 }
 
+TaskListStream::TaskListStream(const Grid& grid, std::vector<Cell> tasks, int team_size, Strategy strategy)
+    : grid_(grid), tasks_(std::move(tasks)), team_size_(team_size), strategy_(strategy) {
+  if (team_size_ < 1) throw std::invalid_argument("task list: team size must be at least 1");
+  if (tasks_.empty()) throw std::invalid_argument("task list: no tasks");
+  for (size_t k = 0; k < tasks_.size(); ++k)
+    if (!grid_.is_free(tasks_[k]))
+      throw std::invalid_argument("task list: task " + std::to_string(k) + " at cell id " +
+                                  std::to_string(tasks_[k]) + " is not a free cell of the map");
+}
+
+const char* TaskListStream::to_string(Strategy s) {
+  switch (s) {
+    case Strategy::RoundRobin: return "roundrobin";
+    case Strategy::RoundRobinFixed: return "roundrobin_fixed";
+    case Strategy::Greedy: return "greedy";
+  }
+  return "?";
+}
+
+TaskListStream::Strategy TaskListStream::parse_strategy(const std::string& s) {
+  if (s == "roundrobin") return Strategy::RoundRobin;
+  if (s == "roundrobin_fixed") return Strategy::RoundRobinFixed;
+  if (s == "greedy") return Strategy::Greedy;
+  throw std::invalid_argument("unknown task assignment strategy '" + s +
+                              "' (expected roundrobin, roundrobin_fixed or greedy)");
+}
+
+const std::vector<long>& TaskListStream::assigned_ids(int agent) const {
+  static const std::vector<long> none;
+  return agent >= 0 && agent < static_cast<int>(ids_.size()) ? ids_[agent] : none;
+}
+
+Cell TaskListStream::next_goal(int agent, Cell current) {
+  require_free(grid_, agent, current, "task list");
+  if (agent < 0) throw std::out_of_range("task stream: negative agent id");
+  if (static_cast<int>(ids_.size()) <= agent) ids_.resize(agent + 1), next_round_.resize(agent + 1, 0);
+  const long m = static_cast<long>(tasks_.size());
+  const int region = grid_.component(current);
+  // At most m candidates are looked at, so an agent whose region holds no task stops asking.
+  for (long tries = 0; tries < m; ++tries) {
+    long id;
+    if (strategy_ == Strategy::Greedy) {
+      if (next_shared_ >= m) break;
+      id = next_shared_++;
+    } else {
+      id = next_round_[agent]++ * team_size_ + agent;
+      if (strategy_ == Strategy::RoundRobinFixed && id >= m) break;
+    }
+    const Cell c = tasks_[id % m];
+    if (grid_.component(c) != region) continue;  // unreachable from here: skipped
+    ids_[agent].push_back(id);
+    return c;
+  }
+  ids_[agent].push_back(-1);
+  return current;
+}
+
+std::unique_ptr<TaskStream> TaskListStream::clone_fresh() const {
+  return std::make_unique<TaskListStream>(grid_, tasks_, team_size_, strategy_);
+}
+
 void check_mapd_cells(const Grid& grid, const std::vector<Cell>& pickups,
                       const std::vector<Cell>& deliveries) {
   if (pickups.empty() || deliveries.empty())

@@ -75,6 +75,44 @@ class PickupDeliveryStream : public TaskStream {
   std::vector<uint8_t> next_is_delivery_;
 };
 
+// A fixed task list run in order, as the League of Robot Runners (LoRR) Start-Kit does
+// (2023 rules, src/CompetitionSystem.cpp at tag 2023-archive; the problem JSON's
+// "taskAssignmentStrategy"), for a team of `team_size` agents and m tasks:
+//  - RoundRobin ("roundrobin", InfAssignSystem): agent k's j-th task has id j * team_size + k
+//    and cell tasks[id % m]; the list repeats forever. Deterministic per agent.
+//  - RoundRobinFixed ("roundrobin_fixed"): the same ids, but each task only once: agent k
+//    gets tasks k, k + team_size, ... and then none.
+//  - Greedy ("greedy", TaskAssignSystem): one shared queue; the next task goes to whichever
+//    agent asks next (in the simulator, agents in id order each step), each task once.
+// A task whose cell the agent cannot reach (another 4-connected region) is skipped. An agent
+// without a task (list exhausted) gets its own cell as goal, which scores nothing, and its id
+// is -1. assigned_ids(agent) lists the ids handed to the agent so far, in order.
+class TaskListStream : public TaskStream {
+ public:
+  enum class Strategy { RoundRobin, RoundRobinFixed, Greedy };
+  // Throws std::invalid_argument for an empty list, a task off the map or on an obstacle, or
+  // team_size < 1.
+  TaskListStream(const Grid& grid, std::vector<Cell> tasks, int team_size, Strategy strategy);
+  std::string name() const override { return "lorr-tasks"; }
+  Cell next_goal(int agent, Cell current) override;
+  std::unique_ptr<TaskStream> clone_fresh() const override;
+  const std::vector<Cell>& tasks() const { return tasks_; }
+  Strategy strategy() const { return strategy_; }
+  const std::vector<long>& assigned_ids(int agent) const;
+  // "roundrobin", "roundrobin_fixed", "greedy"; parse_strategy throws std::invalid_argument.
+  static const char* to_string(Strategy s);
+  static Strategy parse_strategy(const std::string& s);
+
+ private:
+  const Grid& grid_;
+  std::vector<Cell> tasks_;
+  int team_size_;
+  Strategy strategy_;
+  long next_shared_ = 0;                 // Greedy: next queue position
+  std::vector<long> next_round_;         // RoundRobin*: per agent, tasks drawn so far (j)
+  std::vector<std::vector<long>> ids_;   // per agent, ids handed out
+};
+
 // Throws std::invalid_argument unless both sets are non-empty, every cell is free, every pickup
 // can reach some delivery and every delivery some pickup; the message names the first bad cell.
 void check_mapd_cells(const Grid& grid, const std::vector<Cell>& pickups,
