@@ -72,6 +72,7 @@ void Executor::reconcile_adg(const std::vector<RobotRecord>& robots, TickOutput&
     const RobotRecord& rec = robots[r];
     if (!rec.reported) continue;  // missing: stays out
     const Cell x = rec.cell;
+    t.reported_moving = rec.moving;
     if (!t.active) {  // its first report, or it could not be placed before
       if (rec.silent) continue;
       const int other = holder_of(x, r);
@@ -84,6 +85,7 @@ void Executor::reconcile_adg(const std::vector<RobotRecord>& robots, TickOutput&
         continue;
       }
       t = Track{};
+      t.reported_moving = rec.moving;
       t.active = true;
       t.cell = x;
       t.unknown_move = rec.moving;
@@ -189,7 +191,7 @@ int Executor::dispatch_ready(TickOutput& out) {
   int n = 0;
   for (int r = 0; r < num_robots(); ++r) {
     Track& t = tracks_[r];
-    if (!t.active || t.health != RobotHealth::kOk || t.dispatched || t.path.empty()) continue;
+    if (!t.active || t.health != RobotHealth::kOk || t.dispatched || t.path.empty() || holds(r)) continue;
     auto it = visits_.find(t.path.front());
     if (it != visits_.end() && !it->second.empty() && it->second.front() == r) {
       t.dispatched = true;
@@ -288,11 +290,11 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, Dead
     }
     if (adg) {
       const int pending = static_cast<int>(t.path.size()) - (t.dispatched ? 1 : 0);
-      immovable[a] = pending >= cfg_.commit_horizon;
-      agent_goals[a] = planner_goals(r, goals[r], end);
+      immovable[a] = pending >= cfg_.commit_horizon || holds(r);
+      agent_goals[a] = holds(r) ? std::vector<Cell>{end} : planner_goals(r, goals[r], end);
     } else {
       // Lock-step: a robot still moving is held, and the cell it enters is reserved (issue 13).
-      immovable[a] = t.unknown_move;
+      immovable[a] = t.unknown_move || holds(r);
       if (t.unknown_move && t.last_target != kNoCell && t.last_target != t.cell) blocked.push_back(t.last_target);
       agent_goals[a] = goals[r].empty() ? std::vector<Cell>{t.cell} : goals[r];
     }
@@ -358,8 +360,9 @@ void Executor::reconcile_lockstep(const std::vector<RobotRecord>& robots, TickOu
 }
 
 TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vector<std::vector<Cell>>& goals,
-                          DeadlinePlanner& planner, bool proceed_without_missing) {
+                          DeadlinePlanner& planner, bool proceed_without_missing, const std::vector<uint8_t>* hold) {
   TickOutput out;
+  hold_ = hold;
   const int n = num_robots();
   if (static_cast<int>(robots.size()) != n || static_cast<int>(goals.size()) != n) {
     out.skip_reason = "executor: " + std::to_string(robots.size()) + " robot records and " +
@@ -407,9 +410,10 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
     if (!t.active) continue;
     out.cells[r] = t.cell;
     if (cfg_.mode == ExecutionMode::kAdg) {
-      out.command[r] = t.dispatched ? t.path.front() : t.cell;
+      // On hold and at rest: told to stay; its commanded cell stays reserved for when it is released.
+    out.command[r] = t.dispatched && !(holds(r) && !t.reported_moving) ? t.path.front() : t.cell;
       out.end_state[r] = t.path.empty() ? t.cell : t.path.back();
-      if (t.health == RobotHealth::kOk && !t.dispatched && !t.path.empty()) ++out.waiting;
+      if (t.health == RobotHealth::kOk && !t.dispatched && !t.path.empty() && !holds(r)) ++out.waiting;
     } else if (out.command[r] == kNoCell) {
       out.command[r] = t.cell;
       out.end_state[r] = t.cell;

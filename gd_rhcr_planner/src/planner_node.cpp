@@ -1,7 +1,7 @@
 // gd_rhcr_planner_node: a thin ROS adapter over the planning core (src/). It loads the map,
-// keeps the fleet's task bookkeeping (Fleet), and on every tick builds a WorldView from the
-// robots' latest cells, calls the registry's planner, holds robots behind robots that cannot
-// move, validates the step with the core's StepValidator and publishes the step commands.
+// keeps the fleet's task bookkeeping (Fleet), and on every tick hands the robots' reports and
+// goals to the execution layer (Executor, execution.hpp: liveness, planning from committed
+// states, reservation, ADG commitment, validation) and publishes the commands it returns.
 // Topics, services and parameters: gd_rhcr_planner/README.md.
 #include <algorithm>
 #include <chrono>
@@ -36,6 +36,7 @@
 #include <cstdlib>
 
 #include "gd_rhcr_planner/deadline_planner.hpp"
+#include "gd_rhcr_planner/execution.hpp"
 #include "gd_rhcr_planner/fleet.hpp"
 #include "gd_rhcr_planner/map_loader.hpp"
 #include "gd_rhcr_planner/task_store.hpp"
@@ -135,12 +136,7 @@ class PlannerNode {
   // The core.
   std::unique_ptr<LoadedMap> map_;
   std::unique_ptr<gdrhcr::DistTable> dist_;
-  // Distances around the robots that are offline now (they are obstacles until they return);
-  // rebuilt when that set changes. Null while every robot is online.
-  std::shared_ptr<const gdrhcr::DistTable> offline_dist_;
-  std::vector<Cell> offline_cells_;
   std::unique_ptr<DeadlinePlanner> planner_;
-  std::unique_ptr<gdrhcr::StepValidator> validator_;
   std::unique_ptr<Fleet> fleet_;
   std::unique_ptr<TaskStore> store_;  // null when persistence is off
   gdrhcr::MapdCells mapd_;
@@ -149,7 +145,11 @@ class PlannerNode {
   std::map<uint64_t, DeliveryServer::GoalHandle> goal_of_task_;
   uint64_t tick_ = 0, overruns_ = 0, skipped_ = 0, invalid_plans_ = 0, bad_reports_ = 0;
   uint64_t fallback_ticks_ = 0, late_ticks_ = 0, planner_errors_ = 0, store_errors_ = 0;
-  std::vector<Cell> last_next_;  // the last commanded cells (a silent robot may be moving there)
+  // Issue 13: the execution layer (ADG or lock-step), used by the tick thread only.
+  std::string execution_ = "adg";
+  int commit_horizon_ = 1;
+  std::unique_ptr<Executor> executor_;
+  double first_report_s_ = 0;  // when the first robot reported (missing robots are waited for a while)
   std::deque<double> tick_stamps_;  // wall times of recent published ticks, for the rate
   double plan_time_sum_ = 0, plan_time_max_ = 0, step_time_max_ = 0;
   int plan_time_count_ = 0;
@@ -182,6 +182,8 @@ void PlannerNode::load_parameters() {
   pnh_.param("dist_budget_mb", dist_budget_mb_, 256);
   pnh_.param("plan_deadline", plan_deadline_, 0.0);
   pnh_.param("offline_timeout", offline_timeout_, 2.0);
+  pnh_.param("execution", execution_, std::string("adg"));    // issue 13: adg | lockstep
+  pnh_.param("commit_horizon", commit_horizon_, 1);
   if (!pnh_.getParam("task_store", task_store_path_) || task_store_path_ == "default")
     task_store_path_ = default_task_store();
   if (task_store_path_ == "none") task_store_path_.clear();
@@ -239,8 +241,15 @@ void PlannerNode::init() {
     for (auto& u : unused) s += (s.empty() ? "" : ", ") + u;
     ROS_INFO("planner '%s' does not use parameters: %s", planner_name_.c_str(), s.c_str());
   }
-  validator_ = std::make_unique<gdrhcr::StepValidator>(grid);
   fleet_ = std::make_unique<Fleet>(grid, *dist_, num_robots_);
+  {  // the per-tick execution layer (issue 13): throws ParamError on a bad ~execution/~commit_horizon
+    ExecutorConfig ec;
+    ec.mode = parse_execution_mode(execution_);
+    ec.commit_horizon = commit_horizon_;
+    ec.plan_deadline_s = plan_deadline_;
+    ec.dist_budget_bytes = size_t(dist_budget_mb_) << 20;
+    executor_ = std::make_unique<Executor>(grid, *dist_, num_robots_, ec);
+  }
   if (!task_store_path_.empty()) {
     store_ = std::make_unique<TaskStore>(task_store_path_);  // throws on a damaged store
     const auto& saved = store_->loaded();
@@ -473,9 +482,10 @@ void PlannerNode::publish_events_locked() {
 void PlannerNode::on_tick(const ros::TimerEvent& ev) {
   const auto wall0 = std::chrono::steady_clock::now();
   const double period = 1.0 / tick_rate_;
-  std::vector<Cell> pos, next, blocked, offline_cells;
+  std::vector<Cell> pos, next;
   std::vector<std::vector<Cell>> goals;
-  std::vector<uint8_t> held, immovable;
+  std::vector<RobotRecord> robots;
+  bool proceed_without_missing = false;
   uint64_t tick;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -483,61 +493,45 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     for (int r : fleet_->mark_silent(ros::Time::now().toSec(), offline_timeout_))
       ROS_WARN("robot %d sent no state for %.1f s: offline (an obstacle at its last cell); its task is requeued",
                r, offline_timeout_);
-    if (!fleet_->all_reported()) {
-      ++skipped_;
-      last_problem_ = std::to_string(fleet_->missing_robots()) + " robots have not reported a state yet";
+    // Robots that never reported are waited for ~offline_timeout after the first report, then
+    // left out (taken to be off the floor); the rest of the fleet moves (issue 13).
+    const double now_s = ros::Time::now().toSec();
+    const int missing = fleet_->missing_robots();
+    if (missing < fleet_->num_robots() && first_report_s_ == 0) first_report_s_ = now_s;
+    proceed_without_missing = first_report_s_ > 0 && now_s - first_report_s_ >= offline_timeout_;
+    if (missing > 0 && proceed_without_missing) {
+      last_problem_ = std::to_string(missing) + " robots never reported a state: left out of planning";
       last_problem_tick_ = tick_;
-      ROS_INFO_THROTTLE(5.0, "waiting: %s", last_problem_.c_str());
-      return;
-    }
-    const std::string conflict = fleet_->position_conflict();
-    if (!conflict.empty()) {
-      ++skipped_;
-      last_problem_ = "robot states inconsistent: " + conflict;
-      last_problem_tick_ = tick_;
-      ROS_ERROR_THROTTLE(2.0, "no step published: %s", last_problem_.c_str());
-      return;
+      ROS_WARN_THROTTLE(10.0, "%s", last_problem_.c_str());
     }
     fleet_->advance();
     publish_events_locked();
     fleet_->fill_positions(pos);
     fleet_->fill_goals(goals);
-    held.assign(pos.size(), 0);
-    immovable.assign(pos.size(), 0);
-    for (int r = 0; r < fleet_->num_robots(); ++r) {
-      const auto& rob = fleet_->robot(r);
-      held[r] = rob.offline || rob.moving;
-      immovable[r] = rob.offline;
-      if (rob.offline) offline_cells.push_back(rob.cell);
-      // A silent robot may be on its way into the cell last commanded: nobody else enters it.
-      if (rob.silent && r < static_cast<int>(last_next_.size()) && last_next_[r] != rob.cell)
-        blocked.push_back(last_next_[r]);
-    }
+    robots.reserve(pos.size());
+    for (int r = 0; r < fleet_->num_robots(); ++r) robots.push_back(fleet_->robot(r));
   }
 
-  // Plan outside the lock, so services and state updates keep flowing. Offline robots are
-  // immovable obstacles: the planner keeps them in place and its distances route around them.
+  // Liveness, planning, reservation, commitment and validation: the execution layer (ADG or
+  // lock-step, execution.hpp), outside the lock, so services and state updates keep flowing.
   const auto& grid = map_->grid;
-  if (offline_cells != offline_cells_) {
-    offline_cells_ = offline_cells;
-    offline_dist_.reset();
-    if (!offline_cells.empty())
-      offline_dist_ = std::make_shared<const gdrhcr::DistTable>(grid, offline_cells, size_t(dist_budget_mb_) << 20);
+  executor_->set_plan_deadline(plan_deadline_);
+  TickOutput exec = executor_->tick(robots, goals, *planner_, proceed_without_missing);
+  if (!exec.stepped) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++skipped_;
+    last_problem_ = exec.skip_reason;
+    last_problem_tick_ = tick_;
+    ROS_INFO_THROTTLE(5.0, "no step: %s", last_problem_.c_str());
+    return;
   }
-  const gdrhcr::DistTable& dist = offline_dist_ ? *offline_dist_ : *dist_;
-  gdrhcr::WorldView world{grid, dist, static_cast<int>(tick), pos, goals};
-  if (!offline_cells.empty()) world.immovable = &immovable;
-  next = pos;
-  std::string plan_error;
-  // The planner gets plan_deadline; past it (or if it throws) PIBT moves the fleet this tick.
-  const DeadlineOutcome outcome = planner_->step(world, next, plan_deadline_, offline_dist_);
+  for (const std::string& w : exec.warnings) ROS_WARN("%s", w.c_str());
+  pos = exec.cells;
+  next = exec.command;
+  const DeadlineOutcome& outcome = exec.outcome;
   const gdrhcr::StepReport& report = outcome.report;
-  const int held_count = hold_cascade(grid, pos, next, held, blocked);
-  auto violation = validator_->check(pos, next);
-  if (violation) {  // never publish a colliding step: everybody waits instead
-    plan_error = violation->describe(grid, static_cast<int>(tick));
-    next = pos;
-  }
+  const int held_count = exec.held + exec.waiting;
+  const std::string plan_error = exec.plan_error;
 
   // The primary planner's groups and paths, when it planned this tick (else it may still be
   // running an abandoned step on its worker and must not be read).
@@ -550,8 +544,10 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     for (size_t g = 0; g < groups.size(); ++g) {
       gd_rhcr_msgs::Group gm;
       for (int a : groups[g].agents) {
-        gm.members.push_back(a);
-        if (a >= 0 && a < static_cast<int>(group_of.size())) group_of[a] = static_cast<int>(g);
+        if (a < 0 || a >= static_cast<int>(exec.robot_of_agent.size())) continue;
+        const int r = exec.robot_of_agent[a];  // the planner sees the robots that reported
+        gm.members.push_back(r);
+        group_of[r] = static_cast<int>(g);
       }
       gm.size = gm.members.size();
       gm.solver = groups[g].solver;
@@ -561,7 +557,8 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
   std::vector<std::vector<Cell>> planned;
   if (primary && publish_markers_) {
     planned.resize(pos.size());
-    for (size_t r = 0; r < pos.size(); ++r) planned[r] = primary->planned_path(static_cast<int>(r));
+    for (size_t a = 0; a < exec.robot_of_agent.size(); ++a)
+      planned[exec.robot_of_agent[a]] = primary->planned_path(static_cast<int>(a));
   }
 
   gd_rhcr_msgs::StepCommandArray cmds;
@@ -570,7 +567,6 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
   cmds.tick = tick;
   cmds.tick_period = period;
   std::lock_guard<std::mutex> lock(mutex_);
-  last_next_ = next;
   if (outcome.fallback) {
     ++fallback_ticks_;
     if (outcome.primary_late) {
@@ -591,9 +587,11 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     last_problem_tick_ = tick_;
     ROS_ERROR_THROTTLE(1.0, "%s", last_problem_.c_str());
   }
-  cmds.commands.resize(pos.size());
+  cmds.commands.reserve(pos.size());
   for (size_t r = 0; r < pos.size(); ++r) {
-    auto& c = cmds.commands[r];
+    if (next[r] == gdrhcr::kNoCell) continue;  // a robot that never reported gets no command
+    cmds.commands.emplace_back();
+    auto& c = cmds.commands.back();
     c.robot_id = r;
     c.tick = tick;
     c.next_x = grid.x_of(next[r]);
@@ -603,7 +601,8 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     c.task_id = fleet_->task_of(r);
   }
   commands_pub_.publish(cmds);
-  for (size_t r = 0; r < robot_pubs_.size(); ++r) robot_pubs_[r].publish(cmds.commands[r]);
+  for (const auto& c : cmds.commands)
+    if (c.robot_id < robot_pubs_.size()) robot_pubs_[c.robot_id].publish(c);
 
   const double step_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   const double now_s = ros::WallTime::now().toSec();

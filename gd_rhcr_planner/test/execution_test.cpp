@@ -430,3 +430,26 @@ TEST(ExecutorAdg, BadRobotsBecomeObstaclesAndTheRestKeepsMoving) {
     EXPECT_GT(res.health_ticks[3][int(RobotHealth::kInconsistent)], 0) << "seed " << seed;
   }
 }
+
+// A robot on hold (paused, emergency stop) gets no new move and is an obstacle to the planner;
+// released, it goes on.
+TEST(ExecutorAdg, ARobotOnHoldGetsNoNewMove) {
+  const Grid g = Grid::from_rows({"......"});
+  gdrhcr::DistTable dist(g);
+  FnPlanner* fn;
+  auto planner = make_fn_planner(g, 1, &fn);
+  Executor ex(g, dist, 1, ExecutorConfig{});
+  std::vector<RobotRecord> robots{at(g, 1, 0)};
+  std::vector<uint8_t> seen;
+  fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
+    seen = w.immovable ? *w.immovable : std::vector<uint8_t>{0};
+    if (!seen[0]) next[0] = g.cell(2, 0);
+  };
+  std::vector<uint8_t> hold{1};
+  auto out = ex.tick(robots, {{g.cell(5, 0)}}, *planner, false, &hold);
+  EXPECT_EQ(out.command[0], g.cell(1, 0));
+  EXPECT_EQ(seen, std::vector<uint8_t>{1});
+  hold[0] = 0;
+  out = ex.tick(robots, {{g.cell(5, 0)}}, *planner, false, &hold);
+  EXPECT_EQ(out.command[0], g.cell(2, 0));
+}

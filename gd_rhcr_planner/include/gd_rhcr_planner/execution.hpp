@@ -82,10 +82,14 @@ class Executor {
   // One tick. robots: the fleet's records by id (Fleet::robot); goals: Fleet::fill_goals.
   // proceed_without_missing: robots that never reported are left out; when false, no step is made
   // while any robot is missing. The planner must have been built for at least num_robots agents.
+  // hold (optional, per robot): robots that get no new move (paused, emergency stop); a move
+  // already commanded is not taken back (the robot may be making it).
   TickOutput tick(const std::vector<RobotRecord>& robots, const std::vector<std::vector<Cell>>& goals,
-                  DeadlinePlanner& planner, bool proceed_without_missing);
+                  DeadlinePlanner& planner, bool proceed_without_missing,
+                  const std::vector<uint8_t>* hold = nullptr);
 
   const ExecutorConfig& config() const { return cfg_; }
+  void set_plan_deadline(double s) { cfg_.plan_deadline_s = s; }
   int num_robots() const { return static_cast<int>(tracks_.size()); }
   // Introspection (tests, markers): robot r's committed cells not reached yet, in order; the first
   // is being made when dispatched(r).
@@ -111,12 +115,14 @@ class Executor {
     Cell claimed = gdrhcr::kNoCell;  // inconsistent: the cell it reported (blocked)
     bool unknown_move = false;  // reported moving with no move commanded: its neighbours are blocked
     Cell last_target = gdrhcr::kNoCell;  // lockstep: target of its last move command, until it arrives
+    bool reported_moving = false;  // its last report said it is between two cells
   };
 
   void reconcile_adg(const std::vector<RobotRecord>& robots, TickOutput& out);
   void reconcile_lockstep(const std::vector<RobotRecord>& robots, TickOutput& out);
   void resync();
   int dispatch_ready(TickOutput& out);
+  bool holds(int r) const { return hold_ && r < static_cast<int>(hold_->size()) && (*hold_)[r]; }
   int holder_of(Cell c, int except) const;
   void add_blocked_cells(int r, std::vector<Cell>& blocked) const;
   const gdrhcr::DistTable& dist_for(const std::vector<Cell>& obstacles);
@@ -132,6 +138,7 @@ class Executor {
   std::vector<Cell> obstacle_cells_;  // the cells the current obstacle table blocks
   std::shared_ptr<const gdrhcr::DistTable> obstacle_dist_;
   uint64_t steps_ = 0, resyncs_total_ = 0;
+  const std::vector<uint8_t>* hold_ = nullptr;  // during tick()
 };
 
 // Cycles of robots that would each enter the cell the next one leaves (rotations, and swaps) cannot
