@@ -10,6 +10,7 @@
 #include <iostream>
 #include <string>
 
+#include "gdrhcr/lorr_io.hpp"
 #include "gdrhcr/simulator.hpp"
 #include "gdrhcr/validator.hpp"
 
@@ -19,7 +20,11 @@ namespace {
 
 const char* kUsage =
     "usage: gdrhcr_sim --map FILE [options]\n"
-    "  --map FILE          MovingAI .map or RHCR kiva .map (required)\n"
+    "  --map FILE          MovingAI .map or RHCR kiva .map (required unless --lorr-problem)\n"
+    "  --lorr-problem FILE a LoRR Start-Kit problem JSON: its map, agents (teamSize starts) and\n"
+    "                      task list (taskAssignmentStrategy; numTasksReveal is the default\n"
+    "                      --lookahead); replaces --map, --agents, --tasks\n"
+    "  --lorr-out FILE     also write the run as LoRR output JSON (PlanViz, MAPF model)\n"
     "  --tasks random|mapd task stream (default random)\n"
     "  --pickups FILE      MAPD pickup cells, 'x y' per line (default: MAP.pickups beside\n"
     "                      the map if present, else the rule in the README)\n"
@@ -84,27 +89,42 @@ int main(int argc, char** argv) {
     args.set(key, value);
   }
   try {
-    const std::string map_path = args.get_string("map", "");
+    const std::string lorr_path = args.get_string("lorr-problem", "");
+    const std::string lorr_out = args.get_string("lorr-out", "");
+    std::unique_ptr<LorrProblem> lorr;
+    if (!lorr_path.empty()) {
+      for (const char* k : {"map", "agents", "tasks", "pickups", "deliveries"})
+        if (args.has(k)) throw ParamError(std::string("--") + k + " cannot be combined with --lorr-problem (the problem file sets it)");
+      lorr = std::make_unique<LorrProblem>(load_lorr_problem(lorr_path));
+    }
+    const std::string map_path = lorr ? lorr->map_path : args.get_string("map", "");
     if (map_path.empty()) throw ParamError("--map is required\n" + std::string("run with --help for the options"));
-    const std::string task_kind = args.get_choice("tasks", "random", {"random", "mapd"});
+    const std::string task_kind = lorr ? "lorr" : args.get_choice("tasks", "random", {"random", "mapd"});
     const std::string pickups_file = args.get_string("pickups", "");
     const std::string deliveries_file = args.get_string("deliveries", "");
     const std::string planner_name = args.get_string("planner", "pibt");
-    const int agents = args.get_int("agents", 100, 1, 10000000);
+    const int agents = lorr ? lorr->team_size : args.get_int("agents", 100, 1, 10000000);
     const int steps = args.get_int("steps", 500, 1, 100000000);
     const uint64_t seed = args.get_u64("seed", 0);
-    const int lookahead = args.get_int("lookahead", 3, 1, 1000);
+    const int lookahead = args.get_int("lookahead", lorr ? lorr->num_tasks_reveal : 3, 1, 1000);
     const int budget_mb = args.get_int("dist-budget-mb", 256, 1, 1 << 20);
     const std::string out_path = args.get_string("out", "");
     const std::string paths_path = args.get_string("paths", "");
     if (task_kind == "random" && (!pickups_file.empty() || !deliveries_file.empty()))
       throw ParamError("--pickups/--deliveries only apply to --tasks mapd");
 
-    const Grid grid = Grid::load(map_path);
+    const Grid grid = lorr ? std::move(lorr->grid) : Grid::load(map_path);
     DistTable dist(grid, size_t(budget_mb) << 20);
     std::unique_ptr<TaskStream> tasks;
     nlohmann::json task_info = {{"kind", task_kind}};
-    if (task_kind == "random") {
+    TaskListStream* task_list = nullptr;
+    if (lorr) {
+      auto list = std::make_unique<TaskListStream>(grid, lorr->tasks, lorr->team_size, lorr->strategy);
+      task_list = list.get();
+      tasks = std::move(list);
+      task_info = {{"kind", "lorr"}, {"problem", lorr_path}, {"tasks", lorr->tasks.size()},
+                   {"strategy", TaskListStream::to_string(lorr->strategy)}, {"num_tasks_reveal", lorr->num_tasks_reveal}};
+    } else if (task_kind == "random") {
       tasks = std::make_unique<RandomNavigationStream>(grid, seed);
     } else {
       MapdCells cells = mapd_cells_for_map(grid, map_path);
@@ -115,15 +135,16 @@ int main(int argc, char** argv) {
       task_info["deliveries"] = cells.deliveries.size();
       tasks = std::make_unique<PickupDeliveryStream>(grid, cells.pickups, cells.deliveries, seed);
     }
-    const std::vector<Cell> starts = random_starts(grid, agents, seed);
+    const std::vector<Cell> starts = lorr ? lorr->starts : random_starts(grid, agents, seed);
     auto planner = make_planner(planner_name, args, grid, agents, seed);
     args.check_all_used("gdrhcr_sim --planner " + planner_name);
 
     SimOptions opt;
     opt.steps = steps;
     opt.lookahead = lookahead;
-    opt.record_paths = !paths_path.empty();
-    const SimResult r = run_simulation(grid, dist, *tasks, *planner, starts, opt);
+    opt.record_paths = !paths_path.empty() || !lorr_out.empty();
+    RecordingTaskStream recorded(*tasks);
+    const SimResult r = run_simulation(grid, dist, recorded, *planner, starts, opt);
 
     nlohmann::json j = r.to_json();
     j["map"] = map_path;
@@ -141,8 +162,22 @@ int main(int argc, char** argv) {
     j["stats"] = planner->stats();
     j["dist_table"] = {{"rows_cached", dist.cached_rows()},
                        {"bytes_cached", dist.cached_bytes()},
-                       {"bfs_runs", dist.bfs_count()}};
+                       {"bytes_peak", dist.peak_bytes()},
+                       {"bytes_per_row", dist.row_bytes()},
+                       {"index_bytes", dist.index_bytes()},
+                       {"budget_bytes", dist.budget_bytes()},
+                       {"bfs_runs", dist.bfs_count()},
+                       {"evictions", dist.evictions()},
+                       {"over_budget_inserts", dist.over_budget_inserts()}};
     if (!paths_path.empty()) write_paths(grid, r, paths_path);
+    if (!lorr_out.empty()) {
+      std::vector<std::vector<long>> ids;
+      if (task_list)
+        for (int i = 0; i < agents; ++i) ids.push_back(task_list->assigned_ids(i));
+      std::ofstream lo(lorr_out);
+      if (!lo) throw std::runtime_error("cannot write " + lorr_out);
+      lo << lorr_output(grid, r.paths, recorded.goals(), lookahead, ids).dump() << "\n";
+    }
     const std::string text = j.dump(2) + "\n";
     if (out_path.empty()) {
       std::cout << text;

@@ -117,5 +117,39 @@ expect_error "MAPD pickup cannot reach a delivery" "pickup cell \\(0,0\\) cannot
 expect_error "MAPD start cannot reach a pickup" "agent [0-9]+ at \\([0-3],[0-3]\\) cannot reach any pickup cell" \
   --map "$tmp/split.map" --tasks mapd --agents 12 --seed 2 --pickups "$tmp/right_p.txt" --deliveries "$tmp/right_d.txt"
 
+# LoRR problems in and out (issue 12): a Start-Kit problem runs its task list; the LoRR output
+# replays to the same cells as --paths; bad problems name the file and the line or field.
+mkdir -p "$tmp/lorr/maps"
+printf 'type octile\nheight 4\nwidth 6\nmap\nE....S\n.@@@..\n......\nS....E\n' >"$tmp/lorr/maps/small.map"
+printf '3\n0\n11\n23\n' >"$tmp/lorr/agents.txt"
+printf '5\n5\n18\n2\n12\n23\n' >"$tmp/lorr/tasks.txt"
+printf '{"mapFile": "maps/small.map", "agentFile": "agents.txt", "teamSize": 3, "taskFile": "tasks.txt", "numTasksReveal": 1}\n' >"$tmp/lorr/problem.json"
+if "$sim" --lorr-problem "$tmp/lorr/problem.json" --steps 40 --quiet --out "$tmp/lorr/r.json" \
+     --paths "$tmp/lorr/paths.txt" --lorr-out "$tmp/lorr/out.json" &&
+   /usr/bin/python3 - "$tmp/lorr/r.json" "$tmp/lorr/paths.txt" "$tmp/lorr/out.json" <<'PY'
+import json, re, sys
+r = json.load(open(sys.argv[1]))
+assert r["agents"] == 3 and r["tasks"]["kind"] == "lorr" and r["params"]["lookahead"] == 1, r
+o = json.load(open(sys.argv[3]))
+assert o["actionModel"] == "MAPF" and o["teamSize"] == 3 and o["makespan"] == 40
+assert o["numTaskFinished"] == r["goals_reached"] > 0, (o["numTaskFinished"], r["goals_reached"])
+step = {"R": (1, 0), "L": (-1, 0), "U": (0, 1), "D": (0, -1), "W": (0, 0)}  # (dx, dy); U = row + 1
+for line, start, moves in zip(open(sys.argv[2]), o["start"], o["actualPaths"]):
+    cells = [tuple(map(int, c)) for c in re.findall(r"\((\d+),(\d+)\)", line)]
+    x, y = start[1], start[0]
+    replay = [(x, y)]
+    for m in moves.split(","):
+        x, y = x + step[m][0], y + step[m][1]
+        replay.append((x, y))
+    assert replay == cells, (replay, cells)
+PY
+then ok "LoRR problem runs; LoRR output replays the paths"; else bad "LoRR problem run / output"; fi
+printf '{"mapFile": "maps/small.map", "agentFile": "agents.txt", "taskFile": "tasks.txt"}\n' >"$tmp/lorr/noteam.json"
+expect_error "LoRR problem without teamSize" "noteam.json: field \"teamSize\" is missing" --lorr-problem "$tmp/lorr/noteam.json"
+printf '3\n0\n7\n23\n' >"$tmp/lorr/wall.agents"
+printf '{"mapFile": "maps/small.map", "agentFile": "wall.agents", "teamSize": 3, "taskFile": "tasks.txt"}\n' >"$tmp/lorr/wall.json"
+expect_error "LoRR agent on a wall names the line" "wall.agents:3: cell id 7 \\(1,1\\) is an obstacle" --lorr-problem "$tmp/lorr/wall.json"
+expect_error "LoRR problem with --map" "--map cannot be combined with --lorr-problem" --lorr-problem "$tmp/lorr/problem.json" --map "$m"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]
