@@ -142,6 +142,13 @@ def plot_ablation(rows, name, out, prefix):
     return [path]
 
 
+def keep_min_seeds(rows, n):
+    seeds = defaultdict(set)
+    for r in rows:
+        seeds[(r["label"], r["map"], r["agents"])].add(r["seed"])
+    return [r for r in rows if len(seeds[(r["label"], r["map"], r["agents"])]) >= n]
+
+
 def map_name(row):
     return os.path.splitext(os.path.basename(row["map"]))[0]
 
@@ -226,8 +233,14 @@ def main(argv=None):
     ap.add_argument("--title-prefix", default="")
     ap.add_argument("--paper", metavar="NAME", help="the paper's layout, into <out>/NAME.png (see above)")
     ap.add_argument("--markdown", action="store_true", help="print the table of means as Markdown")
+    ap.add_argument("--min-seeds", type=int, default=1,
+                    help="leave out points (label, map, agents) with fewer finished seeds than this")
     args = ap.parse_args(argv)
     rows = load(args.csv)
+    if args.min_seeds > 1:
+        rows = keep_min_seeds(rows, args.min_seeds)
+        if not rows:
+            raise SystemExit("plot_sweep: no point of %s has %d seeds" % (args.csv, args.min_seeds))
     os.makedirs(args.out, exist_ok=True)
     if args.paper:
         for path in plot_paper(rows, args.paper, args.out, args.title_prefix):

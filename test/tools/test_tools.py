@@ -194,6 +194,9 @@ class PlotTest(unittest.TestCase):
                     self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
             table = out.getvalue()
             self.assertIn("| x | 10 | 2 | 1.500 ± 0.707 |", table)  # GD-RHCR first: agents/10 + seed
+            kept = plot_sweep.keep_min_seeds(plot_sweep.load(path)[:-1], 2)  # the last row: V=4, 20 agents, seed 1
+            self.assertEqual(len(kept), 4 * 2 * 2 - 2)
+            self.assertNotIn(("V=4", "20"), {(r["label"], r["agents"]) for r in kept})
             data = plot_sweep.series(plot_sweep.load(path), "throughput")
             self.assertAlmostEqual(data["PIBT"][0][1], 1.5)  # mean of 1.0 and 2.0
             self.assertAlmostEqual(data["PIBT"][0][2], 0.7071067811865476)  # sample SD
