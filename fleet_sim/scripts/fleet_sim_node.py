@@ -5,9 +5,25 @@ Waits for the latched `map` (nav_msgs/OccupancyGrid), places ~num_robots robots 
 free cells (seeded), and executes `step_commands`: each robot moves to its commanded cell,
 taking ~move_fraction of the tick period, and switches its reported cell on arrival. Robots
 publish `robot_states` (gd_rhcr_msgs/RobotStateArray) and tf map -> robot_N/base_link with a
-smoothly interpolated pose. Like a real robot's safety stop, a robot never starts a move into a
-cell held by a robot that is not leaving it, or that a robot still moving is entering (counted
-as `blocked moves` on /diagnostics; zero when the planner's commands are followed by everyone).
+smoothly interpolated pose. Like a real robot's safety stop (the interlock), a robot never starts
+a move into a cell held by a robot that is not leaving it, or that a robot still moving is
+entering (counted as `blocked moves` on /diagnostics; zero when the planner's commands are
+followed by everyone).
+
+Realistic execution (issue 13):
+  ~speed_spread s (default 0): each robot's move takes move_fraction * tick_period * f, with f
+      drawn per robot uniformly from [1 - s, 1 + s] (seeded), so robots run at different speeds.
+  ~p_delay p, ~max_delay_ticks D (defaults 0, 20): random delays as in the League of Robot
+      Runners 2026: on every tick (step command) a robot not already delayed starts a delay with
+      probability p, lasting a uniform 1..D tick periods; a robot at rest ignores commands while
+      delayed, a robot in motion stops where it is and arrives that much later. Seeded.
+  ~absent_robots (list of ids, default []): robots that are not on the floor (switched off, not
+      delivered yet): they never report, hold no cell and ignore commands; the planner must run
+      the rest of the fleet without them.
+  ~interlock (default true): false = robots start every commanded move at once, as a robot
+      without a safety stop would; every move the interlock would have stopped is still counted
+      (`interlock would act`), as are the resulting collisions (`collisions`: a robot arrives in a
+      cell another robot is in; `swaps`: two robots start moves into each other's cells).
 
 Fault injection (for tests, demos and soak runs); times in seconds after the first step
 command; robot ids < 0 (the defaults) disable a fault:
@@ -69,6 +85,8 @@ class Robot(object):
         self.mode = RobotState.MODE_IDLE
         self.task_id = -1
         self.reported = None  # (cell, moving) of the last published state
+        self.speed = 1.0  # move time factor (~speed_spread)
+        self.delay_until = 0.0  # a random delay (~p_delay) holds the robot until then
 
 
 class FleetSim(object):
@@ -77,6 +95,21 @@ class FleetSim(object):
         self.seed = rospy.get_param("~seed", 1)
         self.move_fraction = rospy.get_param("~move_fraction", 0.6)
         self.rate = rospy.get_param("~publish_rate", 20.0)
+        self.speed_spread = float(rospy.get_param("~speed_spread", 0.0))
+        self.p_delay = float(rospy.get_param("~p_delay", 0.0))
+        self.max_delay_ticks = int(rospy.get_param("~max_delay_ticks", 20))
+        self.interlock = bool(rospy.get_param("~interlock", True))
+        if not 0.0 <= self.speed_spread < 1.0:
+            rospy.logfatal("fleet_sim: ~speed_spread must be in [0, 1), not %s", self.speed_spread)
+            sys.exit(1)
+        if not 0.0 <= self.p_delay <= 1.0 or self.max_delay_ticks < 1:
+            rospy.logfatal("fleet_sim: ~p_delay must be in [0, 1] and ~max_delay_ticks >= 1")
+            sys.exit(1)
+        self.delay_rng = random.Random(int(rospy.get_param("~seed", 1)) * 7919 + 13)
+        self.interlock_would_act = 0
+        self.collisions = 0
+        self.swaps = 0
+        self.delays_started = 0
         self.tf_enabled = rospy.get_param("~publish_tf", True)
         self.frame = rospy.get_param("~frame_id", "map")
         self.lock = threading.Lock()
@@ -107,6 +140,17 @@ class FleetSim(object):
         else:
             cells = random.Random(self.seed).sample(free, self.n)
         self.robots = [Robot(i, c) for i, c in enumerate(cells)]
+        absent = rospy.get_param("~absent_robots", [])
+        if not isinstance(absent, list) or any(not isinstance(a, int) or not 0 <= a < self.n for a in absent):
+            rospy.logfatal("fleet_sim: ~absent_robots must be a list of robot ids 0..%d", self.n - 1)
+            sys.exit(1)
+        self.absent = set(absent)
+        for a in self.absent:  # off the map, so it never meets a cell of the floor
+            r = self.robots[a]
+            r.cell = r.src = r.dst = (-1000 - a, -1000)
+        speed_rng = random.Random(self.seed * 104729 + 1)
+        for r in self.robots:
+            r.speed = speed_rng.uniform(1.0 - self.speed_spread, 1.0 + self.speed_spread)
         rospy.loginfo("fleet_sim: %d robots on a %dx%d map", self.n, self.grid.width, self.grid.height)
 
         self.state_pub = rospy.Publisher("robot_states", RobotStateArray, queue_size=10)
@@ -185,12 +229,38 @@ class FleetSim(object):
 
     # --- motion -----------------------------------------------------------------------------
     def advance(self, now):
-        for r in self.robots:
-            if r.moving and now >= r.t0 + r.duration:
-                r.cell = r.dst
-                r.src = r.dst
-                r.moving = False
+        arriving = [r for r in self.robots if r.moving and now >= r.t0 + r.duration]
+        if not arriving:
+            return
+        occupied = {}
+        for o in self.robots:
+            occupied[o.cell] = occupied.get(o.cell, 0) + 1
+        for r in sorted(arriving, key=lambda a: a.t0 + a.duration):  # in the order they arrive
+            if occupied.get(r.dst, 0) > 0:
+                self.collisions += 1
+                rospy.logerr_throttle(1.0, "fleet_sim: robot %d arrived in %s, where another robot is" %
+                                      (r.id, r.dst))
+            occupied[r.cell] -= 1
+            occupied[r.dst] = occupied.get(r.dst, 0) + 1
+            r.cell = r.dst
+            r.src = r.dst
+            r.moving = False
 
+    def start_delays(self, now, period):
+        """LoRR 2026 delays: a robot not delayed starts one with probability p_delay per tick."""
+        if self.p_delay <= 0:
+            return
+        for r in self.robots:
+            if now < r.delay_until or self.delay_rng.random() >= self.p_delay:
+                continue
+            length = self.delay_rng.randint(1, self.max_delay_ticks) * period
+            r.delay_until = now + length
+            self.delays_started += 1
+            if r.moving:
+                r.duration += length  # it stops where it is and arrives that much later
+
+    def delayed(self, rid, now):
+        return now < self.robots[rid].delay_until
     def on_commands(self, msg):
         now = rospy.get_time()
         with self.lock:
@@ -200,6 +270,7 @@ class FleetSim(object):
             self.last_tick = msg.tick
             self.advance(now)
             e = self.update_faults(now)
+            self.start_delays(now, msg.tick_period)
             cells = [r.cell for r in self.robots]
             targets = list(cells)
             frozen = [False] * self.n
@@ -208,8 +279,8 @@ class FleetSim(object):
                     self.invalid_commands += 1
                     continue
                 r = self.robots[c.robot_id]
-                if self.dead(r.id, now):
-                    continue  # a dead robot hears nothing
+                if self.dead(r.id, now) or r.id in self.absent:
+                    continue  # a dead or absent robot hears nothing
                 target = (c.next_x, c.next_y)
                 if not self.offline(r.id, now):
                     r.mode = c.mode
@@ -222,10 +293,14 @@ class FleetSim(object):
                 targets[r.id] = target
             for r in self.robots:
                 frozen[r.id] = (r.moving or self.stalled(r.id, now) or self.offline(r.id, now) or
-                                self.dead(r.id, now))
+                                self.dead(r.id, now) or self.delayed(r.id, now) or r.id in self.absent)
             # A robot still moving (a late or early tick) holds the cell it enters as well.
             entering = [r.dst for r in self.robots if r.moving]
             moves, blocked = resolve_moves(cells, targets, frozen, entering)
+            self.interlock_would_act += len(blocked)
+            if not self.interlock:  # every commanded move starts; what the interlock would stop is counted
+                moves = set(i for i in range(self.n) if not frozen[i] and targets[i] != cells[i])
+                blocked = set()
             if self.slip.episodes:
                 slipped = False
                 for i in sorted(moves):
@@ -241,14 +316,18 @@ class FleetSim(object):
                     self.slips += 1
                     self.slips_stayed += alt is None
                     slipped = True
-                if slipped:  # a robot that stays now blocks the robots that were to follow it
+                if slipped and self.interlock:  # a robot that stays now blocks the robots that were to follow it
                     moves, blocked = resolve_moves(cells, targets, frozen, entering)
             self.blocked_moves += len(blocked)
             duration = max(0.01, self.move_fraction * msg.tick_period)
+            moving_pairs = set((o.src, o.dst) for o in self.robots if o.moving)
             for i in moves:
                 r = self.robots[i]
+                if (targets[i], r.cell) in moving_pairs:  # two robots moving into each other's cells
+                    self.swaps += 1
+                moving_pairs.add((r.cell, targets[i]))
                 r.src, r.dst = r.cell, targets[i]
-                r.t0, r.duration, r.moving = now, duration, True
+                r.t0, r.duration, r.moving = now, max(0.01, duration * r.speed), True
                 r.yaw = math.atan2(-(r.dst[1] - r.src[1]), r.dst[0] - r.src[0])
 
     def pose_of(self, r, now):
@@ -271,7 +350,7 @@ class FleetSim(object):
             self.advance(now)
             self.update_faults(now)
             for r in self.robots:
-                if self.dead(r.id, now):
+                if self.dead(r.id, now) or r.id in self.absent:
                     continue
                 s = RobotState()
                 s.id = r.id
@@ -306,11 +385,21 @@ class FleetSim(object):
             st = DiagnosticStatus()
             st.name = rospy.get_name() + ": fleet"
             st.hardware_id = "fleet_sim"
-            st.level = DiagnosticStatus.OK if self.blocked_moves == 0 else DiagnosticStatus.WARN
+            st.level = DiagnosticStatus.OK if self.blocked_moves == 0 and self.interlock_would_act == 0 \
+                else DiagnosticStatus.WARN
+            if self.collisions or self.swaps:
+                st.level = DiagnosticStatus.ERROR
             st.message = "%d robots" % self.n
             values = [("robots", self.n), ("commands received", self.commands_received),
                       ("last tick", self.last_tick), ("blocked moves", self.blocked_moves),
-                      ("invalid commands", self.invalid_commands)]
+                      ("invalid commands", self.invalid_commands),
+                      ("interlock", "on" if self.interlock else "off"),
+                      ("interlock would act", self.interlock_would_act),
+                      ("collisions", self.collisions), ("swaps", self.swaps),
+                      ("speed spread", self.speed_spread), ("p_delay", self.p_delay),
+                      ("max delay ticks", self.max_delay_ticks), ("delays started", self.delays_started),
+                      ("delayed now", sum(1 for r in self.robots if now < r.delay_until)),
+                      ("absent robots", " ".join(str(a) for a in sorted(self.absent)))]
             if self.fault_period > 0:
                 values.append(("fault period", self.fault_period))
             if self.delay.enabled:
