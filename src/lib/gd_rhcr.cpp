@@ -71,13 +71,30 @@ namespace {
 int default_k_threshold(int num_agents) { return std::max(2, std::min(num_agents / 10, 20)); }
 }  // namespace
 
+GdRhcrConfig GdRhcrConfig::paper() {
+  GdRhcrConfig c;
+  c.pibt = plain_pibt();
+  c.guidance = false;
+  c.max_density = 1.0;
+  return c;
+}
+
+GdRhcrConfig GdRhcrConfig::product() {
+  GdRhcrConfig c;
+  c.pibt = PibtOptions{};
+  c.guidance = true;
+  c.max_density = 0.05;
+  return c;
+}
+
 GdRhcrPlanner::GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, GdRhcrConfig config)
     : grid_(grid),
       seed_(seed),
       cfg_(std::move(config)),
       k_threshold_(cfg_.k_threshold > 0 ? cfg_.k_threshold : default_k_threshold(num_agents)),
       partition_(grid),
-      pibt_(grid, num_agents, seed),
+      pibt_(grid, num_agents, seed, cfg_.pibt),
+      guidance_(cfg_.guidance ? std::make_unique<LocalGuidance>(grid, num_agents, cfg_.lg) : nullptr),
       validator_(grid),
       plan_of_(num_agents),
       slot_of_(num_agents, 0),
@@ -143,6 +160,42 @@ bool GdRhcrPlanner::needs_replan(const WorldView& world, const std::vector<int>&
   return false;
 }
 
+// Prefix sums over the grid of free cells and of agents, for O(1) density queries per group.
+void GdRhcrPlanner::count_density(const WorldView& world) {
+  const int w = grid_.width(), h = grid_.height();
+  std::vector<uint8_t> has_agent(grid_.num_cells(), 0);
+  for (Cell c : world.positions) has_agent[c] = 1;
+  free_sum_.assign(static_cast<size_t>(w + 1) * (h + 1), 0);
+  agent_sum_.assign(free_sum_.size(), 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t k = static_cast<size_t>(y + 1) * (w + 1) + (x + 1);
+      const Cell c = grid_.cell(x, y);
+      free_sum_[k] = grid_.is_free(c) + free_sum_[k - 1] + free_sum_[k - (w + 1)] - free_sum_[k - (w + 1) - 1];
+      agent_sum_[k] = has_agent[c] + agent_sum_[k - 1] + agent_sum_[k - (w + 1)] - agent_sum_[k - (w + 1) - 1];
+    }
+}
+
+// Agents per free cell around the group: its bounding box grown by density_margin.
+double GdRhcrPlanner::local_density(const WorldView& world, const std::vector<int>& group) const {
+  int x0 = grid_.width(), x1 = -1, y0 = grid_.height(), y1 = -1;
+  for (int i : group) {
+    x0 = std::min(x0, grid_.x_of(world.positions[i]));
+    x1 = std::max(x1, grid_.x_of(world.positions[i]));
+    y0 = std::min(y0, grid_.y_of(world.positions[i]));
+    y1 = std::max(y1, grid_.y_of(world.positions[i]));
+  }
+  const int m = cfg_.density_margin, w = grid_.width();
+  x0 = std::max(0, x0 - m), y0 = std::max(0, y0 - m);
+  x1 = std::min(grid_.width() - 1, x1 + m), y1 = std::min(grid_.height() - 1, y1 + m);
+  auto box = [&](const std::vector<int>& sum) {
+    auto at = [&](int x, int y) { return sum[static_cast<size_t>(y) * (w + 1) + x]; };
+    return at(x1 + 1, y1 + 1) - at(x0, y1 + 1) - at(x1 + 1, y0) + at(x0, y0);
+  };
+  const int free = box(free_sum_);
+  return free > 0 ? double(box(agent_sum_)) / free : 1.0;
+}
+
 void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
   const std::vector<int>& agents = *job.agents;
   const int t = world.timestep;
@@ -174,9 +227,12 @@ void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
         const auto& path = p->paths[slot_of_[j]];
         const int end = std::min<int>(path.size(), k + cfg_.H + 1);
         rest.assign(path.begin() + k, path.begin() + end);
-      } else {
-        rest.push_back(world.positions[j]);  // no usable plan: expected to stay
       }
+      if (rest.size() <= 1 && guidance_ && guidance_->next_cell(j, t, world.positions[j]) != kNoCell) {
+        rest = guidance_->path_from(j, t);  // moved by the secondary solver: its guidance
+        if (static_cast<int>(rest.size()) > cfg_.H + 1) rest.resize(cfg_.H + 1);
+      }
+      if (rest.empty()) rest.push_back(world.positions[j]);  // no usable plan: expected to stay
       soft.add_path(rest);
     }
   }
@@ -242,7 +298,18 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
   for (int j = 0; j < world.num_agents(); ++j)
     if (!in_set[j] && fixed_next[j] != kNoCell) fixed.emplace_back(world.positions[j], fixed_next[j]);
   std::vector<Cell> moves(world.num_agents(), kNoCell);
-  pibt_.step(world, moves, agents, fixed);
+  if (guidance_) {
+    // Guidance first, the highest priorities first; PIBT then tries each agent's next cell.
+    std::vector<int> order(agents);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int a, int b) { return pibt_.priority(a) > pibt_.priority(b); });
+    guidance_->update(world, order);
+    std::vector<Cell> preferred(world.num_agents(), kNoCell);
+    for (int i : agents) preferred[i] = guidance_->next_cell(i, world.timestep, world.positions[i]);
+    pibt_.step(world, moves, agents, fixed, &preferred);
+  } else {
+    pibt_.step(world, moves, agents, fixed);
+  }
   for (int i : agents) out[i] = moves[i];
 }
 
@@ -292,6 +359,7 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
   const int t = world.timestep;
   now_ = t;
   partition_.compute(world.positions, cfg_.V);
+  if (cfg_.max_density < 1.0) count_density(world);
   immovable_cells_ = world.immovable_cells();
   immovable_at_ = world.immovable_cell_mask();
   const auto& groups = partition_.groups();
@@ -302,7 +370,9 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
   std::vector<size_t> threshold_groups;
   for (size_t g = 0; g < groups.size(); ++g) {
     last_groups_[g].agents = groups[g];
-    if (static_cast<int>(groups[g].size()) >= k_threshold_ || cfg_.solver == "pibt") {
+    const bool crowded = cfg_.max_density < 1.0 && local_density(world, groups[g]) > cfg_.max_density;
+    if (crowded) ++density_fallbacks_;
+    if (static_cast<int>(groups[g].size()) >= k_threshold_ || cfg_.solver == "pibt" || crowded) {
       last_groups_[g].action = GroupAction::ThresholdFallback;
       threshold_groups.push_back(g);
     } else if (needs_replan(world, groups[g])) {
@@ -360,6 +430,7 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
       plan->goals.push_back(world.goals[i]);
       plan_of_[i] = plan;
       slot_of_[i] = static_cast<int>(s);
+      if (guidance_) guidance_->set_path(i, t, plan->paths[s]);  // guidance searches avoid it
     }
   }
 
@@ -421,6 +492,13 @@ nlohmann::json GdRhcrPlanner::params() const {
           {"threads", cfg_.threads},
           {"solver", cfg_.solver},
           {"solver2", cfg_.solver2},
+          {"pibt_swap", cfg_.pibt.swap},
+          {"pibt_priority_reset", cfg_.pibt.priority_reset},
+          {"guidance", cfg_.guidance ? "local" : "none"},
+          {"max_density", cfg_.max_density},
+          {"density_margin", cfg_.density_margin},
+          {"lg_window", cfg_.lg.window},
+          {"lg_cost", cfg_.lg.collision_cost},
           {"seed", seed_}};
 }
 
@@ -438,6 +516,7 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"pbs_nodes", pbs_nodes_},
           {"soft_conflicts_in_plans", soft_conflicts_},
           {"threshold_fallbacks", threshold_fallbacks_},
+          {"density_fallbacks", density_fallbacks_},
           {"failure_fallbacks", failure_fallbacks_},
           {"timeouts", timeouts_},
           {"repairs", repairs_},

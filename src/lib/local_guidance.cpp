@@ -5,9 +5,6 @@
 
 namespace gdrhcr {
 
-namespace {
-constexpr int kMaxExpansions = 4000;  // per search; the deepest best node is used past it
-}
 
 LocalGuidance::LocalGuidance(const Grid& grid, int num_agents, LocalGuidanceConfig config)
     : grid_(grid),
@@ -18,7 +15,10 @@ LocalGuidance::LocalGuidance(const Grid& grid, int num_agents, LocalGuidanceConf
       goal_(num_agents, kNoCell),
       at_(static_cast<size_t>(slots_) * grid.num_cells(), 0),
       leaving_(static_cast<size_t>(slots_) * grid.num_cells() * 4, 0),
-      closed_(static_cast<size_t>(slots_) * grid.num_cells(), 0) {
+      closed_(static_cast<size_t>(slots_) * grid.num_cells(), 0),
+      seen_(static_cast<size_t>(slots_) * grid.num_cells(), 0),
+      best_g_(static_cast<size_t>(slots_) * grid.num_cells(), 0.f),
+      rng_(config.seed) {
   if (cfg_.window < 1) throw ParamError("local guidance: window must be >= 1");
   if (!(cfg_.collision_cost >= 0)) throw ParamError("local guidance: collision cost must be >= 0");
 }
@@ -91,8 +91,9 @@ bool LocalGuidance::is_valid(const WorldView& world, int i) const {
   const Cell goal = world.goals[i].empty() ? world.positions[i] : world.goals[i][0];
   if (goal_[i] != goal) return false;
   if (!cfg_.lazy) return false;
-  // Keep at least half the window ahead, unless the path already ends on the goal.
-  if (static_cast<int>(p.size()) <= cfg_.window / 2 + 1 && p.back() != goal) return false;
+  // Keep at least `keep` steps ahead (default half the window), unless the path ends on the goal.
+  const int keep = cfg_.keep >= 0 ? cfg_.keep : cfg_.window / 2;
+  if (static_cast<int>(p.size()) <= keep + 1 && p.back() != goal) return false;
   // Replan a path that now meets another one (its own entries count once at each vertex).
   const size_t cells = grid_.num_cells();
   const int horizon = std::min<int>(p.size(), cfg_.recheck + 1);
@@ -136,6 +137,7 @@ void LocalGuidance::plan(const WorldView& world, int i) {
   const size_t cells = grid_.num_cells();
   if (++stamp_ == 0) {
     std::fill(closed_.begin(), closed_.end(), 0);
+    std::fill(seen_.begin(), seen_.end(), 0);
     stamp_ = 1;
   }
   nodes_.clear();
@@ -159,19 +161,29 @@ void LocalGuidance::plan(const WorldView& world, int i) {
     if (mark == stamp_) continue;
     mark = stamp_;
     if (n.t > nodes_[best].t || (n.t == nodes_[best].t && n.f < nodes_[best].f)) best = id;
-    if (n.t == W || ++expanded > kMaxExpansions) break;
+    // Done at the window's end, or on the goal (the agent gets its next goal there).
+    if (n.t == W || n.v == goal || ++expanded > cfg_.max_expansions) break;
     auto expand = [&](Cell u) {
-      if (closed_[static_cast<size_t>(n.t + 1) * cells + u] == stamp_) return;
+      const size_t key = static_cast<size_t>(n.t + 1) * cells + u;
+      if (closed_[key] == stamp_) return;
       const int h = row[u];
       if (h >= kUnreachable) return;
       const int c = collisions(n.v, u, world.timestep + n.t);
       float g = n.g + 1.f;
       if (c > 0) g += static_cast<float>(cfg_.collision_cost) + 1e-3f * c;
+      if (seen_[key] == stamp_ && best_g_[key] <= g) return;  // reached as cheaply before
+      seen_[key] = stamp_;
+      best_g_[key] = g;
       nodes_.push_back({g, g + h, n.t + 1, u, id});
       open_.push_back(static_cast<int32_t>(nodes_.size() - 1));
       std::push_heap(open_.begin(), open_.end(), worse);
     };
-    for (Cell u : grid_.neighbours(n.v)) expand(u);
+    // Neighbours in a random order, so equally good paths do not all bend the same way.
+    Cell nb[4];
+    int m = 0;
+    for (Cell u : grid_.neighbours(n.v)) nb[m++] = u;
+    for (int a = m - 1; a > 0; --a) std::swap(nb[a], nb[rng_() % (a + 1)]);
+    for (int a = 0; a < m; ++a) expand(nb[a]);
     expand(n.v);
   }
   expansions_ += expanded;

@@ -10,11 +10,16 @@
 namespace gdrhcr {
 namespace {
 
-// PIBT's techniques, each switchable for ablations (all on by default).
-PibtOptions pibt_options(Params& p) {
+// `--preset paper` selects the paper's exact configuration (PBS + plain PIBT for GD-RHCR, plain
+// PIBT for the PIBT baseline); `default` (or no preset) the product's stronger one. Explicit
+// parameters override either.
+bool paper_preset(Params& p) { return p.get_choice("preset", "default", {"default", "paper"}) == "paper"; }
+
+// PIBT's techniques, each switchable for ablations. Plain PIBT (the paper's) has no swap.
+PibtOptions pibt_options(Params& p, bool paper) {
   PibtOptions o;
   o.priority_reset = p.get_int("priority-reset", 1, 0, 1) == 1;
-  o.swap = p.get_int("swap", 1, 0, 1) == 1;
+  o.swap = p.get_int("swap", paper ? 0 : 1, 0, 1) == 1;
   o.tie_break = p.get_choice("tie-break", "free-first", {"free-first", "random"}) == "random"
                     ? PibtOptions::TieBreak::kRandom
                     : PibtOptions::TieBreak::kFreeFirst;
@@ -25,8 +30,10 @@ LocalGuidanceConfig guidance_config(Params& p) {
   LocalGuidanceConfig c;
   c.window = p.get_int("lg-window", c.window, 1, 1000);
   c.collision_cost = p.get_double("lg-cost", c.collision_cost, 0.0, 1e6);
-  c.lazy = p.get_int("lg-lazy", 1, 0, 1) == 1;
+  c.lazy = p.get_int("lg-lazy", c.lazy ? 1 : 0, 0, 1) == 1;
   c.recheck = p.get_int("lg-recheck", c.recheck, 0, 1000);
+  c.keep = p.get_int("lg-keep", c.keep, -1, 1000);
+  c.max_expansions = p.get_int("lg-expansions", c.max_expansions, 1, 1 << 30);
   return c;
 }
 
@@ -34,9 +41,10 @@ const std::vector<std::pair<std::string, PlannerFactory>>& registry() {
   static const std::vector<std::pair<std::string, PlannerFactory>> planners = {
       {"pibt",
        [](Params& p, const Grid& grid, int n, uint64_t seed) -> std::unique_ptr<Planner> {
-         const PibtOptions o = pibt_options(p);
+         const PibtOptions o = pibt_options(p, paper_preset(p));
          if (p.get_choice("guidance", "none", {"none", "local"}) == "local") {
-           const LocalGuidanceConfig lg = guidance_config(p);
+           LocalGuidanceConfig lg = guidance_config(p);
+           lg.seed = seed;
            return std::make_unique<PibtPlanner>(grid, n, seed, o, &lg);
          }
          return std::make_unique<PibtPlanner>(grid, n, seed, o);
@@ -54,7 +62,8 @@ const std::vector<std::pair<std::string, PlannerFactory>>& registry() {
        }},
       {"gd-rhcr",
        [](Params& p, const Grid& grid, int n, uint64_t seed) -> std::unique_ptr<Planner> {
-         GdRhcrConfig c;
+         const bool paper = paper_preset(p);
+         GdRhcrConfig c = paper ? GdRhcrConfig::paper() : GdRhcrConfig::product();
          c.V = p.get_int("V", c.V, 0, 1 << 20);
          c.H = p.get_int("H", c.H, 1, 100000);
          c.c_soft = p.get_double("c-soft", c.c_soft, 0.0, 1e9);
@@ -65,6 +74,12 @@ const std::vector<std::pair<std::string, PlannerFactory>>& registry() {
          c.threads = p.get_int("threads", c.threads, 1, 1024);
          c.solver = p.get_choice("solver", c.solver, {"pbs", "pibt"});
          c.solver2 = p.get_choice("solver2", c.solver2, {"pibt"});
+         c.max_density = p.get_double("max-density", c.max_density, 0.0, 1.0);
+         c.density_margin = p.get_int("density-margin", c.density_margin, 0, 1 << 20);
+         c.pibt = pibt_options(p, paper);  // the preset's PIBT unless overridden
+         c.guidance = p.get_choice("guidance", c.guidance ? "local" : "none", {"none", "local"}) == "local";
+         c.lg = guidance_config(p);
+         c.lg.seed = seed;
          return std::make_unique<GdRhcrPlanner>(grid, n, seed, c);
        }},
   };

@@ -8,7 +8,7 @@
 namespace gdrhcr {
 
 RhcrPlanner::RhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, RhcrConfig config)
-    : seed_(seed), cfg_(config), pibt_(grid, num_agents, seed) {
+    : seed_(seed), cfg_(config), pibt_(grid, num_agents, seed, plain_pibt()) {
   if (cfg_.H < 1) throw ParamError("RHCR: H must be >= 1");
   if (cfg_.alpha < 1 || cfg_.alpha > cfg_.H) throw ParamError("RHCR: alpha must be in [1, H]");
   if (!(cfg_.timeout_s > 0)) throw ParamError("RHCR: timeout must be > 0");

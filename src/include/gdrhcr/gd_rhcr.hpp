@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "gdrhcr/group_partition.hpp"
+#include "gdrhcr/local_guidance.hpp"
 #include "gdrhcr/pibt.hpp"
 #include "gdrhcr/planner.hpp"
 #include "gdrhcr/validator.hpp"
@@ -38,6 +39,22 @@ struct GdRhcrConfig {
   int threads = 1;            // thread-pool size for groups replanned in one step
   std::string solver = "pbs";    // primary: pbs | pibt
   std::string solver2 = "pibt";  // secondary: pibt
+  // Groups in a crowded neighbourhood go to the secondary solver whatever their size: the
+  // share of free cells holding an agent within `density_margin` cells of the group's bounding
+  // box must be at most `max_density` for the primary solver (1 = no limit, as in the paper).
+  double max_density = 1.0;
+  int density_margin = 4;
+  PibtOptions pibt;              // the secondary solver's PIBT techniques
+  bool guidance = false;         // the secondary solver follows local guidance paths
+  LocalGuidanceConfig lg;        // ... with these settings
+
+  // The paper's exact configuration (PBS + plain PIBT, K_threshold = min(floor(0.1 k), 20)):
+  // `--preset paper`, used by the paper-reproduction figures.
+  static GdRhcrConfig paper();
+  // The product default: as the paper, but big or crowded groups (local density above 5%)
+  // go to PIBT with swap following local guidance, and guidance paths stand for those agents
+  // in the other groups' soft constraints.
+  static GdRhcrConfig product();
 };
 
 // Why a group was (re)planned this step, or not.
@@ -71,6 +88,8 @@ class GdRhcrPlanner : public Planner {
   struct Plan;
   struct Job;
   bool needs_replan(const WorldView& world, const std::vector<int>& group) const;
+  void count_density(const WorldView& world);
+  double local_density(const WorldView& world, const std::vector<int>& group) const;
   void solve_primary(const WorldView& world, Job& job) const;
   void run_secondary(const WorldView& world, const std::vector<int>& agents,
                      const std::vector<Cell>& next, std::vector<Cell>& out);
@@ -85,6 +104,7 @@ class GdRhcrPlanner : public Planner {
   int k_threshold_;
   GroupPartition partition_;
   PibtStep pibt_;
+  std::unique_ptr<LocalGuidance> guidance_;  // paths of secondary agents and, as obstacles, plans
   StepValidator validator_;  // the final check, with its per-cell scratch kept across steps
   std::vector<std::shared_ptr<const Plan>> plan_of_;  // lambda_i: the plan agent i follows
   std::vector<int> slot_of_;                          // agent i's row in that plan
@@ -93,6 +113,7 @@ class GdRhcrPlanner : public Planner {
   std::vector<GroupInfo> last_groups_;
   // This step's immovable agents: their cells (blocked for every primary solve) and, per
   // cell, whether one stands there. Written before the parallel phase, read during it.
+  std::vector<int> free_sum_, agent_sum_;  // 2-D prefix sums (W+1)x(H+1) of free cells, agents
   std::vector<Cell> immovable_cells_;
   std::vector<uint8_t> immovable_at_;
   struct Arena;
@@ -101,6 +122,7 @@ class GdRhcrPlanner : public Planner {
   // Statistics.
   long steps_ = 0, group_count_sum_ = 0, max_group_sum_ = 0, agents_sum_ = 0;
   long replanned_groups_ = 0, reused_groups_ = 0, primary_calls_ = 0;
+  long density_fallbacks_ = 0;
   long threshold_fallbacks_ = 0, failure_fallbacks_ = 0, timeouts_ = 0, repairs_ = 0;
   long pbs_nodes_ = 0, soft_conflicts_ = 0, solved_steps_ = 0;
   double plan_time_sum_all_steps_ = 0, primary_time_sum_ = 0;

@@ -6,6 +6,7 @@
 // guidance cell first, so agents spread over parallel aisles and queue instead of meeting
 // head-on, while PIBT keeps the step collision-free.
 //
+// A search ends at the window's end or on the goal (the agent gets its next goal there).
 // Guidance paths are kept across steps in absolute time and replanned lazily: when the agent is
 // not where its path says, when its goal changed, or when less than half the window is left.
 // The collision table counts, per (time mod (W+1), cell), the guidance paths there and, per
@@ -13,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <random>
 #include <vector>
 
 #include "gdrhcr/planner.hpp"
@@ -21,8 +23,11 @@ namespace gdrhcr {
 
 struct LocalGuidanceConfig {
   int window = 20;               // W: timesteps each guidance path covers
-  double collision_cost = 1.0;   // added per step that meets another path (vertex or swap)
-  bool lazy = true;              // keep valid paths; false replans every agent every step
+  double collision_cost = 3.0;   // added per step that meets another path (vertex or swap)
+  bool lazy = false;             // keep valid paths; false replans every agent every step
+  int max_expansions = 4000;    // per search; past it the deepest cheapest node so far is used
+  int keep = -1;                 // a kept path must still cover this many steps (-1: window / 2)
+  uint64_t seed = 1;             // random order of neighbours in the search
   int recheck = 20;              // a kept path is replanned if it meets another path within this many steps
 };
 
@@ -72,7 +77,9 @@ class LocalGuidance {
   std::vector<uint16_t> at_;             // [slot * cells + c]: paths at c
   std::vector<uint16_t> leaving_;        // [(slot * cells + c) * 4 + dir]: paths leaving c by dir
   // Search scratch: closed marks stamped per (t, cell), node pool, open list.
-  std::vector<uint32_t> closed_;
+  std::vector<uint32_t> closed_, seen_;
+  std::vector<float> best_g_;
+  std::minstd_rand rng_;
   uint32_t stamp_ = 0;
   std::vector<Node> nodes_;
   std::vector<int32_t> open_;

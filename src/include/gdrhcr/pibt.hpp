@@ -34,6 +34,13 @@ struct PibtOptions {
   TieBreak tie_break = TieBreak::kFreeFirst;
 };
 
+// PIBT as published (the paper configuration and RHCR's fallback): no swap.
+inline PibtOptions plain_pibt() {
+  PibtOptions o;
+  o.swap = false;
+  return o;
+}
+
 // The step function, reusable on a subset of agents (GD-RHCR moves large groups with it).
 class PibtStep {
  public:

@@ -30,7 +30,16 @@ struct SimResult {
   int planned_steps = 0;      // steps in which the planner ran a solver
   double plan_time_mean_s = 0, plan_time_max_s = 0;
   double step_wall_mean_s = 0, step_wall_max_s = 0;  // wall time of plan_step, every step
+  double step_cpu_mean_s = 0;  // process CPU time of plan_step (all threads), per step
   double wall_time_s = 0;
+  // Progress: a goal is late once the agent has spent more than twice the shortest distance
+  // from where it got the goal (at least 2 steps) without reaching it. Dense runs must not
+  // livelock: these show agents that starve.
+  long agents_late = 0;      // agents that had at least one late goal
+  long goals_late = 0;       // goals (reached or not) that became late
+  long late_at_end = 0;      // agents whose current goal is late when the run ends
+  int longest_wait = 0;      // most consecutive steps an agent stood still off its goal
+  double max_lateness = 0;   // largest (steps taken or elapsed) / shortest distance of a goal
   std::vector<std::vector<Cell>> paths;  // paths[agent][t], when recorded
   nlohmann::json to_json() const;        // the figures above (not the paths)
 };

@@ -1,0 +1,171 @@
+// Local guidance (local_guidance.hpp) and the solvers that follow it: guided PIBT and GD-RHCR's
+// product configuration. Every simulation validates every executed step (a collision throws).
+#include <gtest/gtest.h>
+
+#include "gdrhcr/gd_rhcr.hpp"
+#include "gdrhcr/local_guidance.hpp"
+#include "gdrhcr/pibt.hpp"
+#include "gdrhcr/simulator.hpp"
+#include "gdrhcr/task_stream.hpp"
+
+using namespace gdrhcr;
+
+namespace {
+std::string repo(const std::string& rel) { return std::string(GDRHCR_SOURCE_DIR) + "/" + rel; }
+
+class ListStream : public TaskStream {
+ public:
+  explicit ListStream(std::vector<std::vector<Cell>> goals) : goals_(std::move(goals)), next_(goals_.size(), 0) {}
+  std::string name() const override { return "list"; }
+  Cell next_goal(int agent, Cell) override { return goals_[agent][next_[agent]++ % goals_[agent].size()]; }
+  std::unique_ptr<TaskStream> clone_fresh() const override { return std::make_unique<ListStream>(goals_); }
+
+ private:
+  std::vector<std::vector<Cell>> goals_;
+  std::vector<size_t> next_;
+};
+
+SimResult run(const Grid& g, TaskStream& tasks, Planner& p, const std::vector<Cell>& starts, int steps) {
+  DistTable dist(g);
+  SimOptions opt;
+  opt.steps = steps;
+  opt.record_paths = true;
+  return run_simulation(g, dist, tasks, p, starts, opt);
+}
+
+bool is_walk(const Grid& g, const std::vector<Cell>& path) {
+  for (size_t k = 0; k + 1 < path.size(); ++k)
+    if (path[k] != path[k + 1] && !g.step_allowed(path[k], path[k + 1])) return false;
+  return true;
+}
+
+GdRhcrConfig product_budget_config() {
+  GdRhcrConfig c = GdRhcrConfig::product();
+  c.node_budget = 200;
+  c.timeout_s = 1e6;
+  return c;
+}
+}  // namespace
+
+TEST(LocalGuidance, PathIsAWalkFromTheAgentToItsGoal) {
+  Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+  DistTable dist(g);
+  LocalGuidance lg(g, 1, {});
+  auto starts = random_starts(g, 2, 5);
+  std::vector<Cell> pos = {starts[0]};
+  std::vector<std::vector<Cell>> goals = {{starts[1]}};
+  WorldView w{g, dist, 0, pos, goals};
+  lg.update(w, {0});
+  const auto path = lg.path_from(0, 0);
+  ASSERT_FALSE(path.empty());
+  EXPECT_EQ(path.front(), pos[0]);
+  EXPECT_TRUE(is_walk(g, path));
+  EXPECT_LE(static_cast<int>(path.size()), lg.config().window + 1);
+  const int d = dist.get(starts[1], starts[0]);
+  if (d <= lg.config().window) {  // alone: a shortest path that ends on the goal
+    EXPECT_EQ(path.back(), starts[1]);
+    EXPECT_EQ(static_cast<int>(path.size()) - 1, d);
+  } else {  // it gets as near as the window allows
+    EXPECT_EQ(dist.get(starts[1], path.back()), d - lg.config().window);
+  }
+  EXPECT_EQ(lg.next_cell(0, 0, pos[0]), path[1]);
+  EXPECT_EQ(lg.next_cell(0, 0, path[1] == pos[0] ? kNoCell : path[1]), kNoCell);  // not where it stands
+}
+
+TEST(LocalGuidance, SecondPathAvoidsTheFirstWhenALaneIsFree) {
+  // Two lanes; agent 0 is guided first along the top lane eastwards. Agent 1 heads west from
+  // the top lane's east end: the cheapest plan that meets no one drops to the bottom lane.
+  Grid g = Grid::from_rows({"........", "........"});
+  DistTable dist(g);
+  LocalGuidanceConfig cfg;
+  cfg.window = 10;
+  LocalGuidance lg(g, 2, cfg);
+  std::vector<Cell> pos = {g.cell(0, 0), g.cell(7, 0)};
+  std::vector<std::vector<Cell>> goals = {{g.cell(7, 0)}, {g.cell(0, 0)}};
+  WorldView w{g, dist, 0, pos, goals};
+  lg.update(w, {0, 1});
+  const auto a = lg.path_from(0, 0), b = lg.path_from(1, 0);
+  ASSERT_EQ(a.size(), 8u);
+  for (Cell c : a) EXPECT_EQ(g.y_of(c), 0);  // the first keeps its straight path
+  for (size_t t = 0; t < b.size(); ++t) {
+    if (t < a.size()) EXPECT_NE(b[t], a[t]) << "vertex conflict at " << t;
+    if (t + 1 < a.size() && t + 1 < b.size()) EXPECT_FALSE(b[t] == a[t + 1] && b[t + 1] == a[t]) << "swap at " << t;
+  }
+  EXPECT_EQ(b.back(), g.cell(0, 0));
+  EXPECT_LE(b.size(), 11u);  // a detour of two steps at most
+}
+
+TEST(LocalGuidance, RejectsNonsenseConfig) {
+  Grid g = Grid::from_rows({"...."});
+  LocalGuidanceConfig c;
+  c.window = 0;
+  EXPECT_THROW(LocalGuidance(g, 1, c), ParamError);
+  c.window = 5;
+  c.collision_cost = -1;
+  EXPECT_THROW(LocalGuidance(g, 1, c), ParamError);
+}
+
+TEST(GuidedPibt, CorridorHeadOnAllArrive) {
+  // A one-lane corridor with a dead-end branch: agents meet head-on and must use the branch.
+  Grid g = Grid::from_rows({"..........", "@@@@.@@@@@", "@@@@.@@@@@"});
+  LocalGuidanceConfig lg;
+  PibtPlanner p(g, 2, 3, PibtOptions{}, &lg);
+  ListStream tasks({{g.cell(9, 0), g.cell(0, 0)}, {g.cell(0, 0), g.cell(9, 0)}});
+  SimResult r = run(g, tasks, p, {g.cell(0, 0), g.cell(9, 0)}, 80);
+  EXPECT_GE(r.goals_reached, 4);
+  EXPECT_EQ(r.collisions, 0);
+}
+
+TEST(GuidedPibt, DenseNonBiconnectedMapBeatsPlainPibt) {
+  // random-32-32-20 has dead ends and cut cells; 300 agents fill 37% of it.
+  Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+  auto starts = random_starts(g, 300, 4);
+  LocalGuidanceConfig lg;
+  PibtPlanner guided(g, 300, 4, PibtOptions{}, &lg), plain(g, 300, 4);
+  RandomNavigationStream t1(g, 4), t2(g, 4);
+  SimResult a = run(g, t1, guided, starts, 150);
+  SimResult b = run(g, t2, plain, starts, 150);
+  EXPECT_GT(a.goals_reached, b.goals_reached);
+  EXPECT_LE(a.throughput, a.free_flow_throughput);
+  EXPECT_GT(guided.stats()["guidance_searches"].get<long>(), 0);
+}
+
+TEST(GdRhcrProduct, CorridorAndNonBiconnectedMapsCollisionFreeWithGoals) {
+  {
+    Grid g = Grid::from_rows({"..........", "@@@@.@@@@@", "@@@@.@@@@@"});
+    GdRhcrPlanner p(g, 3, 2, product_budget_config());
+    ListStream tasks({{g.cell(9, 0), g.cell(0, 0)}, {g.cell(0, 0), g.cell(9, 0)}, {g.cell(4, 2), g.cell(5, 0)}});
+    SimResult r = run(g, tasks, p, {g.cell(0, 0), g.cell(9, 0), g.cell(4, 1)}, 100);
+    EXPECT_GE(r.goals_reached, 5);
+  }
+  Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+  GdRhcrPlanner p(g, 250, 6, product_budget_config());
+  RandomNavigationStream tasks(g, 6);
+  SimResult r = run(g, tasks, p, random_starts(g, 250, 6), 100);
+  EXPECT_GT(r.goals_reached, 300);
+  EXPECT_GT(p.stats()["density_fallbacks"].get<long>() + p.stats()["threshold_fallbacks"].get<long>(), 0);
+}
+
+TEST(GdRhcrProduct, SparseGroupsStillUseThePrimarySolver) {
+  Grid g = Grid::load(repo("maps/warehouse-10-20-10-2-1.map"));
+  GdRhcrPlanner p(g, 60, 3, product_budget_config());
+  RandomNavigationStream tasks(g, 3);
+  SimResult r = run(g, tasks, p, random_starts(g, 60, 3), 60);
+  EXPECT_GT(r.goals_reached, 0);
+  EXPECT_GT(p.stats()["primary_calls"].get<long>(), 0);
+}
+
+TEST(GdRhcrProduct, IdenticalResultsAcrossThreadCountsInBudgetMode) {
+  Grid g = Grid::load(repo("maps/warehouse-10-20-10-2-1.map"));
+  auto starts = random_starts(g, 400, 9);
+  std::vector<std::vector<Cell>> first;
+  for (int threads : {1, 2, 4}) {
+    GdRhcrConfig cfg = product_budget_config();
+    cfg.threads = threads;
+    GdRhcrPlanner p(g, 400, 9, cfg);
+    RandomNavigationStream tasks(g, 9);
+    SimResult r = run(g, tasks, p, starts, 60);
+    if (first.empty()) first = r.paths;
+    else EXPECT_EQ(r.paths, first) << threads << " threads";
+  }
+}
