@@ -64,7 +64,7 @@ from geometry_msgs.msg import Pose, TransformStamped
 from nav_msgs.msg import OccupancyGrid
 
 from gd_rhcr_msgs.msg import RobotState, RobotStateArray, StepCommandArray
-from fleet_sim.faults import FaultSchedule, slip_target
+from fleet_sim.faults import FaultSchedule, RandomDelays, slip_target
 from fleet_sim.grid_frame import GridFrame, adjacent_or_same, resolve_moves
 
 
@@ -102,10 +102,11 @@ class FleetSim(object):
         if not 0.0 <= self.speed_spread < 1.0:
             rospy.logfatal("fleet_sim: ~speed_spread must be in [0, 1), not %s", self.speed_spread)
             sys.exit(1)
-        if not 0.0 <= self.p_delay <= 1.0 or self.max_delay_ticks < 1:
-            rospy.logfatal("fleet_sim: ~p_delay must be in [0, 1] and ~max_delay_ticks >= 1")
+        try:
+            self.delays = RandomDelays(self.p_delay, self.max_delay_ticks, int(rospy.get_param("~seed", 1)) * 7919 + 13)
+        except ValueError as e:
+            rospy.logfatal("fleet_sim: %s", e)
             sys.exit(1)
-        self.delay_rng = random.Random(int(rospy.get_param("~seed", 1)) * 7919 + 13)
         self.interlock_would_act = 0
         self.collisions = 0
         self.swaps = 0
@@ -247,17 +248,7 @@ class FleetSim(object):
             r.moving = False
 
     def start_delays(self, now, period):
-        """LoRR 2026 delays: a robot not delayed starts one with probability p_delay per tick."""
-        if self.p_delay <= 0:
-            return
-        for r in self.robots:
-            if now < r.delay_until or self.delay_rng.random() >= self.p_delay:
-                continue
-            length = self.delay_rng.randint(1, self.max_delay_ticks) * period
-            r.delay_until = now + length
-            self.delays_started += 1
-            if r.moving:
-                r.duration += length  # it stops where it is and arrives that much later
+        self.delays_started += self.delays.tick(now, period, [r for r in self.robots if r.id not in self.absent])
 
     def delayed(self, rid, now):
         return now < self.robots[rid].delay_until

@@ -4,7 +4,7 @@ schedules and slip rule (no master needed)."""
 import math
 import unittest
 
-from fleet_sim.faults import FaultSchedule, slip_target
+from fleet_sim.faults import FaultSchedule, RandomDelays, slip_target
 from fleet_sim.grid_frame import GridFrame, resolve_moves
 
 
@@ -121,10 +121,40 @@ class FaultScheduleTest(unittest.TestCase):
         self.assertIsNone(f.pending_slip(4, 3.5))
 
 
+class RandomDelaysTest(unittest.TestCase):
+    class R(object):
+        def __init__(self, moving=False):
+            self.delay_until, self.moving, self.duration = 0.0, moving, 0.3
+
+    def test_every_robot_delayed_one_to_d_ticks_when_p_is_one(self):
+        robots = [self.R(moving=(i % 2 == 0)) for i in range(200)]
+        d = RandomDelays(1.0, 4, seed=3)
+        self.assertEqual(d.tick(10.0, 0.5, robots), 200)
+        lengths = set(round((r.delay_until - 10.0) / 0.5) for r in robots)
+        self.assertEqual(lengths, {1, 2, 3, 4})
+        for r in robots:  # a moving robot arrives that much later
+            self.assertAlmostEqual(r.duration, 0.3 + (r.delay_until - 10.0) if r.moving else 0.3)
+        self.assertEqual(d.tick(10.25, 0.5, robots), 0)  # nobody starts a second delay while delayed
+
+    def test_rate_and_seed(self):
+        def run(seed):
+            robots = [self.R() for _ in range(100)]
+            d = RandomDelays(0.01, 20, seed=seed)
+            return sum(d.tick(t * 0.5, 0.5, robots) for t in range(1000)), [r.delay_until for r in robots]
+        a, b = run(1), run(1)
+        self.assertEqual(a, b)
+        # 100 robots x 1000 ticks, p 0.01, each delay idles a robot ~10.5 ticks on average:
+        # about 100000 / (100 + 10.5) = 905 delays.
+        self.assertTrue(700 < a[0] < 1100, a[0])
+        self.assertEqual(RandomDelays(0.0, 20, 1).tick(0.0, 0.5, [self.R()]), 0)
+        with self.assertRaises(ValueError):
+            RandomDelays(0.1, 0, 1)
+
+
 if __name__ == "__main__":
     import rosunit
 
-    class AllTests(GridFrameTest, ResolveMovesTest, SlipTest, FaultScheduleTest):
+    class AllTests(GridFrameTest, ResolveMovesTest, SlipTest, FaultScheduleTest, RandomDelaysTest):
         pass
 
     rosunit.unitrun("fleet_sim", "grid_frame", AllTests)

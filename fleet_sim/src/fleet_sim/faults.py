@@ -10,6 +10,7 @@ next one fell due is skipped (`missed`). An episode lasts `duration` seconds (< 
 for slips, `count` commanded moves.
 """
 import math
+import random
 
 # 4-neighbour directions in the order the slip rule tries them: +x, +y (down a row), -x, -y.
 DIRECTIONS = ((1, 0), (0, 1), (-1, 0), (0, -1))
@@ -124,3 +125,35 @@ def slip_target(cell, target, is_free, claimed):
         if is_free(*c) and c not in claimed:
             return c
     return None
+
+
+class RandomDelays(object):
+    """Random delays as in the League of Robot Runners 2026: on every tick a robot that is not
+    delayed starts a delay with probability `p`, lasting a uniform 1..`max_ticks` tick periods.
+    Robots are objects with `delay_until` (s), `moving` and `duration` (s, of the move under way):
+    a robot at rest stays put until `delay_until`; a moving robot stops where it is and arrives
+    that much later (its `duration` grows by the delay). Seeded, so a seed fixes the pattern."""
+
+    def __init__(self, p, max_ticks, seed):
+        if not 0.0 <= p <= 1.0 or max_ticks < 1:
+            raise ValueError("p_delay must be in [0, 1] and max_delay_ticks >= 1")
+        self.p = p
+        self.max_ticks = max_ticks
+        self.rng = random.Random(seed)
+        self.started = 0
+
+    def tick(self, now, period, robots):
+        """One tick at time `now` (s) with tick period `period` (s). Returns the delays started."""
+        n = 0
+        if self.p <= 0:
+            return n
+        for r in robots:
+            if now < r.delay_until or self.rng.random() >= self.p:
+                continue
+            length = self.rng.randint(1, self.max_ticks) * period
+            r.delay_until = now + length
+            if r.moving:
+                r.duration += length
+            n += 1
+        self.started += n
+        return n
