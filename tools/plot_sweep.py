@@ -28,12 +28,12 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 COLORS = {"GD-RHCR": "tab:red", "GD-RHCR (paper)": "tab:red", "GD-RHCR (default)": "tab:orange",
-          "RHCR": "tab:green", "PIBT": "tab:blue"}
+          "RHCR": "tab:green", "PIBT": "tab:blue", "PIBT (paper)": "tab:purple"}
 # The paper's column order in its two figure families; other maps follow alphabetically.
 PAPER_ORDER = ["warehouse-10-20-10-2-1", "warehouse-10-20-10-2-2", "sortation-1", "sortation-2",
                "random-64-64-20", "room-64-64-var1", "room-64-64-var2", "random-32-32-20",
                "room-32-32-var1", "empty-48-48"]
-LABEL_ORDER = ["GD-RHCR (paper)", "GD-RHCR", "GD-RHCR (default)", "RHCR", "PIBT"]
+LABEL_ORDER = ["GD-RHCR (paper)", "GD-RHCR", "GD-RHCR (default)", "RHCR", "PIBT", "PIBT (paper)"]
 
 
 def load(path):
