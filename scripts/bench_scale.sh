@@ -46,12 +46,13 @@ runs = [json.loads(l) for l in open(sys.argv[1]) if l.strip()]
 last = {}
 for r in runs:  # the latest run of each configuration
     last[(os.path.basename(r["map"]), r["agents"], r["planner"], r["steps"])] = r
-print("| map | agents | planner | steps | ms/step mean | p99 | peak RSS MB | throughput | BFS runs | GD-RHCR / PIBT |")
-print("|---|---|---|---|---|---|---|---|---|---|")
+print("| map | agents | planner | steps | ms/step mean | p99 | CPU ms/step | peak RSS MB | throughput | BFS runs | GD-RHCR / PIBT |")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
 for (m, n, p, s), r in sorted(last.items()):
     pibt = last.get((m, n, "pibt", s))
     ratio = "%.2f" % (r["throughput"] / pibt["throughput"]) if p != "pibt" and pibt and pibt["throughput"] > 0 else ""
-    print("| %s | %d | %s | %d | %.1f | %.1f | %.0f | %.3f | %d | %s |" % (
-        m, n, p, s, r["ms_per_step_mean"], r["ms_per_step_p99"], r["peak_rss_mb"], r["throughput"],
+    print("| %s | %d | %s | %d | %.1f | %.1f | %.1f | %.0f | %.3f | %d | %s |" % (
+        m, n, p, s, r["ms_per_step_mean"], r["ms_per_step_p99"], r.get("cpu_ms_per_step_mean", float("nan")),
+        r["peak_rss_mb"], r["throughput"],
         r["bfs_runs"], ratio))
 PY

@@ -2,7 +2,8 @@
 //   bench_scale --map FILE --planner NAME --agents N [--steps 300] [--seed 1] [--lookahead 3]
 //               [--dist-budget-mb 256] [--json FILE] [planner options, e.g. --threads 2]
 // Random goals. Prints one line: ms per step (mean, p50, p99, max, the wall time of plan_step
-// around the planner), peak RSS of this process, throughput, distance-table BFS runs during the
+// around the planner; and the mean process CPU time of a step, all threads, which a busy
+// machine disturbs less), peak RSS of this process, throughput, distance-table BFS runs during the
 // steps (the free-flow bound computed afterwards is not counted) and bytes.
 // --json appends the same figures as one JSON line (scripts/bench_scale.sh collects them).
 #include <sys/resource.h>
@@ -85,10 +86,10 @@ int main(int argc, char** argv) {
     const long rss = peak_rss_kb();
     std::printf("bench_scale map=%s planner=%s agents=%d steps=%d seed=%llu\n", map.c_str(), planner->name().c_str(),
                 agents, steps, (unsigned long long)seed);
-    std::printf("  ms per step: mean %.2f  p50 %.2f  p99 %.2f  max %.2f | peak RSS %.0f MB | throughput %.3f "
+    std::printf("  ms per step: mean %.2f  p50 %.2f  p99 %.2f  max %.2f (CPU, all threads: mean %.2f) | peak RSS %.0f MB | throughput %.3f "
                 "(free flow %.3f) | BFS %llu, rows cached %zu, %.0f MB (peak %.0f MB, budget %d MB, over-budget "
                 "inserts %llu) | wall %.1f s\n",
-                mean_ms, pct(0.5), pct(0.99), t.back() * 1e3, rss / 1024.0, r.throughput, r.free_flow_throughput,
+                mean_ms, pct(0.5), pct(0.99), t.back() * 1e3, r.step_cpu_mean_s * 1e3, rss / 1024.0, r.throughput, r.free_flow_throughput,
                 (unsigned long long)timed.bfs_in_steps, dist.cached_rows(), dist.cached_bytes() / 1048576.0,
                 dist.peak_bytes() / 1048576.0, budget_mb, (unsigned long long)dist.over_budget_inserts(), r.wall_time_s);
     if (!json_path.empty()) {
@@ -96,6 +97,7 @@ int main(int argc, char** argv) {
                           {"seed", seed}, {"lookahead", lookahead}, {"params", planner->params()},
                           {"ms_per_step_mean", mean_ms}, {"ms_per_step_p50", pct(0.5)},
                           {"ms_per_step_p99", pct(0.99)}, {"ms_per_step_max", t.back() * 1e3},
+                          {"cpu_ms_per_step_mean", r.step_cpu_mean_s * 1e3},
                           {"plan_time_mean_s", r.plan_time_mean_s}, {"peak_rss_mb", rss / 1024.0},
                           {"throughput", r.throughput}, {"free_flow_throughput", r.free_flow_throughput},
                           {"goals_reached", r.goals_reached}, {"collisions", r.collisions},
