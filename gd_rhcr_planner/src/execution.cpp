@@ -124,11 +124,14 @@ void Executor::reconcile_adg(const std::vector<RobotRecord>& robots, TickOutput&
       t.dispatched = false;
       t.claimed = kNoCell;
     } else {  // a cell it was not commanded into
-      // A slip (it ended in a free neighbour of where it was or was going) is taken as the truth;
+      // A slip (it ended in a free neighbour of the cell it was in) is taken as the truth;
       // a cell another robot holds, or a jump, is not: the robot is an obstacle at both cells.
       const int other = holder_of(x, r);
-      const bool reachable = grid_.step_allowed(t.cell, x) || (t.dispatched && grid_.step_allowed(t.path.front(), x));
-      if (other < 0 && reachable) {
+      const bool reachable = grid_.step_allowed(t.cell, x);  // one move from where it was
+      // A robot that already claimed this very cell while another robot held it is not believed
+      // now that the cell is free: the same report stays inconsistent.
+      const bool same_claim = t.health == RobotHealth::kInconsistent && t.claimed == x;
+      if (other < 0 && reachable && !same_claim) {
         out.warnings.push_back(who(r) + " reports " + grid_.describe(x) + ", not the cell it was commanded (" +
                                grid_.describe(t.dispatched ? t.path.front() : t.cell) + "): replanned from there");
         t.cell = x;
@@ -289,8 +292,11 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, Dead
       continue;
     }
     if (adg) {
-      const int pending = static_cast<int>(t.path.size()) - (t.dispatched ? 1 : 0);
-      immovable[a] = pending >= cfg_.commit_horizon || holds(r);
+      // A robot with commit_horizon moves committed and not finished (the one it is making
+      // included: a robot still on its way at the next tick is late) gets no further move in
+      // this step; the others plan around its end state, so no commitments pile up behind a
+      // late robot.
+      immovable[a] = static_cast<int>(t.path.size()) >= cfg_.commit_horizon || holds(r);
       agent_goals[a] = holds(r) ? std::vector<Cell>{end} : planner_goals(r, goals[r], end);
     } else {
       // Lock-step: a robot still moving is held, and the cell it enters is reserved (issue 13).

@@ -12,8 +12,8 @@
 //   no lock-step. A dispatched cell stays reserved for the robot until it reports arrival, and a
 //   commitment is never changed by a replan, so any pattern of delays gives no collision, and,
 //   since commitments follow one global plan order with cycles (rotations) turned into waits, no
-//   deadlock. A robot with `commit_horizon` moves committed but not dispatched is immovable for
-//   the planner in that step (the others plan around it).
+//   deadlock. A robot with `commit_horizon` moves committed and not finished (the one it is
+//   making included) is immovable for the planner in that step (the others plan around it).
 // * "lockstep" (the node's behaviour before issue 13, kept for comparison): every tick the planner
 //   plans from the reported cells; a robot still moving is held, the cell it is entering is
 //   reserved (issue 13's fix), and robots that would enter a held robot's cell are held too.
@@ -50,7 +50,7 @@ const char* robot_health_name(RobotHealth h);
 
 struct ExecutorConfig {
   ExecutionMode mode = ExecutionMode::kAdg;
-  int commit_horizon = 1;       // ADG: planned moves a robot may hold beyond the one it makes (>= 1)
+  int commit_horizon = 1;       // ADG: moves a robot may have committed and not finished, the one it makes included (>= 1)
   double plan_deadline_s = 0;   // per planner call (DeadlinePlanner); <= 0 waits for the planner
   size_t dist_budget_bytes = size_t(256) << 20;  // distance table around bad robots
 };
