@@ -56,7 +56,9 @@ struct GdRhcrPlanner::Plan {
 struct GdRhcrPlanner::Job {
   size_t group_index = 0;
   const std::vector<int>* agents = nullptr;
+  Clock::time_point deadline = Clock::time_point::max();  // of the primary solves (step budget)
   PbsResult result;
+  bool budget_skipped = false;  // not started: the step budget was used up
 };
 
 struct GdRhcrPlanner::Arena {
@@ -104,6 +106,7 @@ GdRhcrPlanner::GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, Gd
   if (!(cfg_.c_soft >= 0)) throw ParamError("gd-rhcr: c_soft must be >= 0");
   if (cfg_.threads < 1) throw ParamError("gd-rhcr: threads must be >= 1");
   if (!(cfg_.timeout_s > 0)) throw ParamError("gd-rhcr: timeout must be > 0");
+  if (!(cfg_.step_budget_s >= 0)) throw ParamError("gd-rhcr: step budget must be >= 0 seconds");
   if (cfg_.node_budget < 0) throw ParamError("gd-rhcr: node budget must be >= 0");
   if (cfg_.solver != "pbs" && cfg_.solver != "pibt")
     throw ParamError("gd-rhcr: solver must be pbs or pibt, got '" + cfg_.solver + "'");
@@ -160,6 +163,19 @@ bool GdRhcrPlanner::needs_replan(const WorldView& world, const std::vector<int>&
   return false;
 }
 
+// Agents by blocks of kBlock x kBlock cells, so each group's soft constraints visit only the
+// agents near it instead of every agent.
+void GdRhcrPlanner::index_agents(const WorldView& world) {
+  blocks_w_ = (grid_.width() + kBlock - 1) / kBlock;
+  const int blocks_h = (grid_.height() + kBlock - 1) / kBlock;
+  block_agents_.resize(static_cast<size_t>(blocks_w_) * blocks_h);
+  for (auto& b : block_agents_) b.clear();
+  for (int j = 0; j < world.num_agents(); ++j) {
+    const Cell c = world.positions[j];
+    block_agents_[static_cast<size_t>(grid_.y_of(c) / kBlock) * blocks_w_ + grid_.x_of(c) / kBlock].push_back(j);
+  }
+}
+
 // Prefix sums over the grid of free cells and of agents, for O(1) density queries per group.
 void GdRhcrPlanner::count_density(const WorldView& world) {
   const int w = grid_.width(), h = grid_.height();
@@ -203,7 +219,18 @@ void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
   // previous step (plan_of_ is not written during the parallel phase). Only agents that could
   // meet the group within H steps matter: Manhattan distance (a lower bound on the path
   // distance) at most 2H from the group's bounding box.
-  SoftConstraintTable soft(grid_);
+  const auto t_start = Clock::now();
+  // One table per thread, reused: clearing it costs what was added, not the map's size.
+  thread_local std::unique_ptr<SoftConstraintTable> table;
+  thread_local const Grid* table_grid = nullptr;
+  thread_local int table_cells = 0;
+  if (!table || table_grid != &grid_ || table_cells != grid_.num_cells()) {
+    table = std::make_unique<SoftConstraintTable>(grid_);
+    table_grid = &grid_;
+    table_cells = grid_.num_cells();
+  }
+  SoftConstraintTable& soft = *table;
+  soft.clear();
   if (cfg_.c_soft > 0) {
     int x0 = grid_.width(), x1 = -1, y0 = grid_.height(), y1 = -1;
     for (int i : agents) {
@@ -215,26 +242,31 @@ void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
     const int margin = 2 * cfg_.H;
     const int my_group = partition_.group_of(agents[0]);
     std::vector<Cell> rest;
-    for (int j = 0; j < world.num_agents(); ++j) {
-      if (partition_.group_of(j) == my_group) continue;
-      const int x = grid_.x_of(world.positions[j]), y = grid_.y_of(world.positions[j]);
-      if (x < x0 - margin || x > x1 + margin || y < y0 - margin || y > y1 + margin) continue;
-      rest.clear();
-      const Plan* p = plan_of_[j].get();
-      const int k = p ? t - p->start_time : -1;
-      if (p && k >= 0 && k < static_cast<int>(p->paths[slot_of_[j]].size()) &&
-          p->paths[slot_of_[j]][k] == world.positions[j]) {
-        const auto& path = p->paths[slot_of_[j]];
-        const int end = std::min<int>(path.size(), k + cfg_.H + 1);
-        rest.assign(path.begin() + k, path.begin() + end);
-      }
-      if (rest.size() <= 1 && guidance_ && guidance_->next_cell(j, t, world.positions[j]) != kNoCell) {
-        rest = guidance_->path_from(j, t);  // moved by the secondary solver: its guidance
-        if (static_cast<int>(rest.size()) > cfg_.H + 1) rest.resize(cfg_.H + 1);
-      }
-      if (rest.empty()) rest.push_back(world.positions[j]);  // no usable plan: expected to stay
-      soft.add_path(rest);
-    }
+    // Only the blocks of the spatial index that overlap the grown box are visited.
+    const int bx0 = std::max(0, x0 - margin) / kBlock, bx1 = std::min(grid_.width() - 1, x1 + margin) / kBlock;
+    const int by0 = std::max(0, y0 - margin) / kBlock, by1 = std::min(grid_.height() - 1, y1 + margin) / kBlock;
+    for (int by = by0; by <= by1; ++by)
+      for (int bx = bx0; bx <= bx1; ++bx)
+        for (int j : block_agents_[static_cast<size_t>(by) * blocks_w_ + bx]) {
+          if (partition_.group_of(j) == my_group) continue;
+          const int x = grid_.x_of(world.positions[j]), y = grid_.y_of(world.positions[j]);
+          if (x < x0 - margin || x > x1 + margin || y < y0 - margin || y > y1 + margin) continue;
+          rest.clear();
+          const Plan* p = plan_of_[j].get();
+          const int k = p ? t - p->start_time : -1;
+          if (p && k >= 0 && k < static_cast<int>(p->paths[slot_of_[j]].size()) &&
+              p->paths[slot_of_[j]][k] == world.positions[j]) {
+            const auto& path = p->paths[slot_of_[j]];
+            const int end = std::min<int>(path.size(), k + cfg_.H + 1);
+            rest.assign(path.begin() + k, path.begin() + end);
+          }
+          if (rest.size() <= 1 && guidance_ && guidance_->next_cell(j, t, world.positions[j]) != kNoCell) {
+            rest = guidance_->path_from(j, t);  // moved by the secondary solver: its guidance
+            if (static_cast<int>(rest.size()) > cfg_.H + 1) rest.resize(cfg_.H + 1);
+          }
+          if (rest.empty()) rest.push_back(world.positions[j]);  // no usable plan: expected to stay
+          soft.add_path(rest);
+        }
   }
   // Immovable agents (offline robots) are not planned: every path avoids their cells, theirs
   // and those of the other groups (hard, as they will not move whatever anyone plans).
@@ -253,7 +285,20 @@ void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
   pc.time_limit_s = cfg_.timeout_s;
   pc.node_budget = cfg_.node_budget;
   pc.blocked_cells = immovable_cells_.empty() ? nullptr : &immovable_cells_;
+  if (job.deadline != Clock::time_point::max()) {  // the step budget: give up if nothing is left
+    const double left = std::chrono::duration<double>(job.deadline - Clock::now()).count();
+    if (left <= 0) {
+      job.result = PbsResult{};
+      job.result.timed_out = true;
+      job.budget_skipped = true;
+      job.result.time_s = std::chrono::duration<double>(Clock::now() - t_start).count();
+      return;
+    }
+    pc.time_limit_s = std::min(pc.time_limit_s, left);
+  }
   job.result = solve_pbs(grid_, world.dist, starts, goals, soft.empty() ? nullptr : &soft, pc);
+  // The plan-time metric covers building the soft constraints too.
+  job.result.time_s = std::chrono::duration<double>(Clock::now() - t_start).count();
   if (job.result.success && planned.size() != agents.size()) {  // back in group order
     std::vector<std::vector<Cell>> paths(agents.size());
     for (size_t a = 0, k = 0; a < agents.size(); ++a)
@@ -303,7 +348,7 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
     std::vector<int> order(agents);
     std::stable_sort(order.begin(), order.end(),
                      [&](int a, int b) { return pibt_.priority(a) > pibt_.priority(b); });
-    guidance_->update(world, order);
+    guidance_->update(world, order, step_deadline_);
     std::vector<Cell> preferred(world.num_agents(), kNoCell);
     for (int i : agents) preferred[i] = guidance_->next_cell(i, world.timestep, world.positions[i]);
     pibt_.step(world, moves, agents, fixed, &preferred);
@@ -358,8 +403,15 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
   const int n = world.num_agents();
   const int t = world.timestep;
   now_ = t;
+  const auto step_start = Clock::now();
   partition_.compute(world.positions, cfg_.V);
   if (cfg_.max_density < 1.0) count_density(world);
+  index_agents(world);
+  // Guidance searches stop at 90% of the step budget (the agents left fall back to distances).
+  step_deadline_ = cfg_.step_budget_s > 0
+                       ? step_start + std::chrono::duration_cast<Clock::duration>(
+                                          std::chrono::duration<double>(0.9 * cfg_.step_budget_s))
+                       : Clock::time_point::max();
   immovable_cells_ = world.immovable_cells();
   immovable_at_ = world.immovable_cell_mask();
   const auto& groups = partition_.groups();
@@ -377,7 +429,15 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
       threshold_groups.push_back(g);
     } else if (needs_replan(world, groups[g])) {
       last_groups_[g].action = GroupAction::Primary;
-      jobs.push_back(Job{g, &groups[g], {}});
+      Job job;
+      job.group_index = g;
+      job.agents = &groups[g];
+      // With a step budget the primary solves get its first 60%; the rest is kept for the
+      // secondary solver, which moves whatever they leave.
+      if (cfg_.step_budget_s > 0)
+        job.deadline = step_start + std::chrono::duration_cast<Clock::duration>(
+                                        std::chrono::duration<double>(0.6 * cfg_.step_budget_s));
+      jobs.push_back(std::move(job));
     } else {
       last_groups_[g].action = GroupAction::Reused;
     }
@@ -413,6 +473,7 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
     step_max_time = std::max(step_max_time, job.result.time_s);
     last_groups_[job.group_index].solve_time_s = job.result.time_s;
     if (job.result.timed_out) ++timeouts_;
+    if (job.budget_skipped) ++budget_skips_;
     if (!job.result.success) {
       ++failure_fallbacks_;
       last_groups_[job.group_index].action = GroupAction::FailureFallback;
@@ -496,6 +557,7 @@ nlohmann::json GdRhcrPlanner::params() const {
           {"pibt_priority_reset", cfg_.pibt.priority_reset},
           {"guidance", cfg_.guidance ? "local" : "none"},
           {"max_density", cfg_.max_density},
+          {"step_budget_s", cfg_.step_budget_s},
           {"density_margin", cfg_.density_margin},
           {"lg_window", cfg_.lg.window},
           {"lg_cost", cfg_.lg.collision_cost},
@@ -517,6 +579,8 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"soft_conflicts_in_plans", soft_conflicts_},
           {"threshold_fallbacks", threshold_fallbacks_},
           {"density_fallbacks", density_fallbacks_},
+          {"budget_skips", budget_skips_},
+          {"guidance_cut_short", guidance_ ? guidance_->cut_short() : 0},
           {"failure_fallbacks", failure_fallbacks_},
           {"timeouts", timeouts_},
           {"repairs", repairs_},

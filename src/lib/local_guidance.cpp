@@ -105,13 +105,25 @@ bool LocalGuidance::is_valid(const WorldView& world, int i) const {
   return true;
 }
 
-void LocalGuidance::update(const WorldView& world, const std::vector<int>& agents) {
+void LocalGuidance::update(const WorldView& world, const std::vector<int>& agents,
+                           std::chrono::steady_clock::time_point deadline) {
   const int now = world.timestep;
+  const bool timed = deadline != std::chrono::steady_clock::time_point::max();
   for (size_t i = 0; i < path_.size(); ++i) drop_past(static_cast<int>(i), now);
-  for (int i : agents) {
+  for (size_t k = 0; k < agents.size(); ++k) {
+    const int i = agents[k];
     if (is_valid(world, i)) continue;
     enroll(i, -1);
     path_[i].clear();
+    if (timed && (k % 16) == 0 && std::chrono::steady_clock::now() >= deadline) {
+      ++cut_short_;  // out of time: no guidance for the rest; PIBT uses distances for them
+      for (size_t r = k + 1; r < agents.size(); ++r) {
+        if (is_valid(world, agents[r])) continue;
+        enroll(agents[r], -1);
+        path_[agents[r]].clear();
+      }
+      return;
+    }
     plan(world, i);
     enroll(i, +1);
   }

@@ -70,6 +70,7 @@ const std::vector<std::pair<std::string, PlannerFactory>>& registry() {
          c.k_threshold = p.get_int("k-threshold", 0, 1, 1 << 30);
          c.timeout_s = p.get_double("timeout", c.timeout_s, 0, 1e9);
          if (!(c.timeout_s > 0)) throw ParamError("parameter timeout must be > 0 seconds");
+         c.step_budget_s = p.get_double("step-budget", 0, 0, 1e6);
          c.node_budget = p.get_int("node-budget", 0, 0, 2000000000);
          c.threads = p.get_int("threads", c.threads, 1, 1024);
          c.solver = p.get_choice("solver", c.solver, {"pbs", "pibt"});

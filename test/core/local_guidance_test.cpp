@@ -169,3 +169,27 @@ TEST(GdRhcrProduct, IdenticalResultsAcrossThreadCountsInBudgetMode) {
     else EXPECT_EQ(r.paths, first) << threads << " threads";
   }
 }
+
+TEST(GdRhcrProduct, StepBudgetIsHonouredByCounting) {
+  // A budget no solve can fit: every primary solve is skipped and counted, guidance is cut
+  // short, the secondary solver moves everyone, and the run stays collision-free and moving.
+  Grid g = Grid::load(repo("maps/warehouse-10-20-10-2-1.map"));
+  GdRhcrConfig cfg = product_budget_config();
+  cfg.step_budget_s = 1e-9;
+  GdRhcrPlanner p(g, 300, 4, cfg);
+  RandomNavigationStream tasks(g, 4);
+  SimResult r = run(g, tasks, p, random_starts(g, 300, 4), 40);
+  EXPECT_GT(r.goals_reached, 0);
+  const auto s = p.stats();
+  EXPECT_GT(s["budget_skips"].get<long>(), 0);
+  EXPECT_EQ(s["budget_skips"].get<long>(), s["primary_calls"].get<long>());
+  EXPECT_EQ(s["guidance_cut_short"].get<long>(), 40);
+  // Without a budget the same run solves groups with PBS and never skips.
+  GdRhcrPlanner q(g, 300, 4, product_budget_config());
+  RandomNavigationStream tasks2(g, 4);
+  run(g, tasks2, q, random_starts(g, 300, 4), 40);
+  EXPECT_EQ(q.stats()["budget_skips"].get<long>(), 0);
+  EXPECT_GT(q.stats()["primary_calls"].get<long>(), 0);
+  cfg.step_budget_s = -1;
+  EXPECT_THROW(GdRhcrPlanner(g, 10, 1, cfg), ParamError);
+}

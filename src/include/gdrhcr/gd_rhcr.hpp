@@ -16,6 +16,7 @@
 // so an executed step is never in collision.
 #pragma once
 
+#include <chrono>
 #include <memory>
 #include <string>
 #include <vector>
@@ -35,6 +36,10 @@ struct GdRhcrConfig {
   int k_threshold = 0;        // groups this large go to the secondary solver; 0 = the paper's
                               // default min(floor(0.1 k), 20), floored at 2 (see .cpp)
   double timeout_s = 60.0;    // wall-clock limit of one primary solve
+  // Wall-clock budget of a whole step; 0 = none. Primary solves get its first 60% (groups not
+  // solved by then are moved by the secondary solver, counted as budget_skips), guidance
+  // searches stop at 90%.
+  double step_budget_s = 0;
   long node_budget = 0;       // deterministic PBS node limit per solve; 0 = none
   int threads = 1;            // thread-pool size for groups replanned in one step
   std::string solver = "pbs";    // primary: pbs | pibt
@@ -89,6 +94,7 @@ class GdRhcrPlanner : public Planner {
   struct Job;
   bool needs_replan(const WorldView& world, const std::vector<int>& group) const;
   void count_density(const WorldView& world);
+  void index_agents(const WorldView& world);
   double local_density(const WorldView& world, const std::vector<int>& group) const;
   void solve_primary(const WorldView& world, Job& job) const;
   void run_secondary(const WorldView& world, const std::vector<int>& agents,
@@ -113,6 +119,10 @@ class GdRhcrPlanner : public Planner {
   std::vector<GroupInfo> last_groups_;
   // This step's immovable agents: their cells (blocked for every primary solve) and, per
   // cell, whether one stands there. Written before the parallel phase, read during it.
+  static constexpr int kBlock = 8;  // spatial index: agents per kBlock x kBlock cells
+  std::vector<std::vector<int>> block_agents_;
+  int blocks_w_ = 0;
+  std::chrono::steady_clock::time_point step_deadline_ = std::chrono::steady_clock::time_point::max();
   std::vector<int> free_sum_, agent_sum_;  // 2-D prefix sums (W+1)x(H+1) of free cells, agents
   std::vector<Cell> immovable_cells_;
   std::vector<uint8_t> immovable_at_;
@@ -122,7 +132,7 @@ class GdRhcrPlanner : public Planner {
   // Statistics.
   long steps_ = 0, group_count_sum_ = 0, max_group_sum_ = 0, agents_sum_ = 0;
   long replanned_groups_ = 0, reused_groups_ = 0, primary_calls_ = 0;
-  long density_fallbacks_ = 0;
+  long density_fallbacks_ = 0, budget_skips_ = 0;
   long threshold_fallbacks_ = 0, failure_fallbacks_ = 0, timeouts_ = 0, repairs_ = 0;
   long pbs_nodes_ = 0, soft_conflicts_ = 0, solved_steps_ = 0;
   double plan_time_sum_all_steps_ = 0, primary_time_sum_ = 0;

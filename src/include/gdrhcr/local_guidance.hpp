@@ -13,6 +13,7 @@
 // direction, those leaving the cell, so adding, removing and querying a path is O(W).
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <random>
 #include <vector>
@@ -37,7 +38,9 @@ class LocalGuidance {
 
   // Brings the guidance of `agents` up to date for timestep world.timestep, in the given order
   // (earlier agents' paths are seen by later ones). Paths of other agents stay in the table.
-  void update(const WorldView& world, const std::vector<int>& agents);
+  // With a deadline, agents not reached by then keep no guidance this step (counted).
+  void update(const WorldView& world, const std::vector<int>& agents,
+              std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max());
   // Sets agent i's expected path from time world.timestep on (e.g. a plan made by another
   // solver), so guidance searches avoid it; path[0] is its cell now.
   void set_path(int i, int now, const std::vector<Cell>& path);
@@ -50,6 +53,7 @@ class LocalGuidance {
   std::vector<Cell> path_from(int i, int now) const;
 
   long searches() const { return searches_; }
+  long cut_short() const { return cut_short_; }
   long expansions() const { return expansions_; }
   const LocalGuidanceConfig& config() const { return cfg_; }
 
@@ -83,7 +87,7 @@ class LocalGuidance {
   uint32_t stamp_ = 0;
   std::vector<Node> nodes_;
   std::vector<int32_t> open_;
-  long searches_ = 0, expansions_ = 0;
+  long searches_ = 0, expansions_ = 0, cut_short_ = 0;
 };
 
 }  // namespace gdrhcr
