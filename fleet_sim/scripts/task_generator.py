@@ -8,8 +8,9 @@ Tasks are drawn uniformly and seeded, at ~rate tasks per second, while fewer tha
 tasks are open (queued, assigned or picked, tracked on `task_status`); ~max_tasks > 0 stops
 after that many.
 
-Full load: ~max_open -1 means 2 x ~num_robots (so every robot has a task and as many wait);
-any large number works too. ~rate may be hundreds per second: a timer runs at ~rate Hz up to
+Full load is the default: ~max_open -1 (default) means 2 x ~num_robots (so every robot has a
+task and as many wait); without ~num_robots the robots of the first `robot_states` message are
+counted. Any large number works too; a small ~max_open gives a light load. ~rate defaults to 100. ~rate may be hundreds per second: a timer runs at ~rate Hz up to
 10 Hz and each event publishes up to rate/10 tasks (never more than the open-task deficit), so
 the number of open tasks is topped up within 0.1 s.
 
@@ -28,7 +29,7 @@ import time
 import rosgraph
 import rospy
 
-from gd_rhcr_msgs.msg import MapdCells, Task, TaskStatus
+from gd_rhcr_msgs.msg import MapdCells, RobotStateArray, Task, TaskStatus
 from gd_rhcr_msgs.srv import ListTasks
 
 FINISHED = (TaskStatus.DELIVERED, TaskStatus.FAILED, TaskStatus.CANCELLED)
@@ -37,12 +38,17 @@ MAX_TIMER_HZ = 10.0
 
 class TaskGenerator(object):
     def __init__(self):
-        self.rate = float(rospy.get_param("~rate", 1.0))
-        self.max_open = int(rospy.get_param("~max_open", 20))
+        self.rate = float(rospy.get_param("~rate", 100.0))
+        self.max_open = int(rospy.get_param("~max_open", -1))
         if self.max_open < 0:
             num_robots = int(rospy.get_param("~num_robots", 0))
             if num_robots <= 0:
-                rospy.logfatal("task_generator: ~max_open -1 needs ~num_robots > 0")
+                try:  # count the fleet from its first report
+                    num_robots = len(rospy.wait_for_message("robot_states", RobotStateArray, timeout=60.0).robots)
+                except rospy.ROSException:
+                    num_robots = 0
+            if num_robots <= 0:
+                rospy.logfatal("task_generator: ~max_open -1 needs ~num_robots > 0 (or robots on robot_states)")
                 raise SystemExit(1)
             self.max_open = 2 * num_robots
         if not self.rate > 0:

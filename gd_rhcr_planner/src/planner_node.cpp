@@ -15,6 +15,9 @@
 
 #include <actionlib/server/action_server.h>
 #include <diagnostic_msgs/DiagnosticArray.h>
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <diagnostic_updater/update_functions.h>
+#include <dynamic_reconfigure/server.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
@@ -22,6 +25,9 @@
 #include <xmlrpcpp/XmlRpcValue.h>
 
 #include <gd_rhcr_msgs/CancelTask.h>
+#include <gd_rhcr_msgs/EmergencyStop.h>
+#include <gd_rhcr_msgs/SetPaused.h>
+#include <gd_rhcr_planner/PlannerConfig.h>
 #include <gd_rhcr_msgs/DeliveryAction.h>
 #include <gd_rhcr_msgs/GroupArray.h>
 #include <gd_rhcr_msgs/ListTasks.h>
@@ -36,7 +42,12 @@
 #include <cstdlib>
 
 #include "gd_rhcr_planner/deadline_planner.hpp"
+#include "gd_rhcr_planner/dispatcher.hpp"
 #include "gd_rhcr_planner/execution.hpp"
+#include "gd_rhcr_planner/fleet_markers.hpp"
+#include "gd_rhcr_planner/fleet_stats.hpp"
+#include "gd_rhcr_planner/health.hpp"
+#include "gd_rhcr_planner/operator_control.hpp"
 #include "gd_rhcr_planner/fleet.hpp"
 #include "gd_rhcr_planner/map_loader.hpp"
 #include "gd_rhcr_planner/task_store.hpp"
@@ -66,32 +77,6 @@ std::string xmlrpc_to_string(XmlRpc::XmlRpcValue& v) {
   }
 }
 
-// A colour per index, spread around the hue circle (golden ratio steps).
-std_msgs::ColorRGBA palette(int i, float alpha = 1.0f) {
-  const double h = std::fmod(i * 0.618033988749895, 1.0) * 6.0;
-  const double s = 0.75, v = 0.95;
-  const int k = static_cast<int>(h);
-  const double f = h - k, p = v * (1 - s), q = v * (1 - s * f), t = v * (1 - s * (1 - f));
-  double r, g, b;
-  switch (k % 6) {
-    case 0: r = v, g = t, b = p; break;
-    case 1: r = q, g = v, b = p; break;
-    case 2: r = p, g = v, b = t; break;
-    case 3: r = p, g = q, b = v; break;
-    case 4: r = t, g = p, b = v; break;
-    default: r = v, g = p, b = q; break;
-  }
-  std_msgs::ColorRGBA c;
-  c.r = r, c.g = g, c.b = b, c.a = alpha;
-  return c;
-}
-
-std_msgs::ColorRGBA rgba(float r, float g, float b, float a) {
-  std_msgs::ColorRGBA c;
-  c.r = r, c.g = g, c.b = b, c.a = a;
-  return c;
-}
-
 class PlannerNode {
  public:
   PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh), pnh_(pnh) {}
@@ -111,7 +96,14 @@ class PlannerNode {
   void on_goal(DeliveryServer::GoalHandle gh);
   void on_cancel_goal(DeliveryServer::GoalHandle gh);
   void on_tick(const ros::TimerEvent& ev);
-  void on_diagnostics(const ros::TimerEvent&);
+  // Issue 14: operator services, live tuning, diagnostic_updater.
+  bool on_set_paused(gd_rhcr_msgs::SetPaused::Request& req, gd_rhcr_msgs::SetPaused::Response& res);
+  bool on_emergency_stop(gd_rhcr_msgs::EmergencyStop::Request& req, gd_rhcr_msgs::EmergencyStop::Response& res);
+  void on_reconfigure(gd_rhcr_planner::PlannerConfig& config, uint32_t level);
+  void apply_reconfigure_locked(std::unique_ptr<DeadlinePlanner>& retired);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);
+  gdrhcr::Params planner_params_for(const gd_rhcr_planner::PlannerConfig& c) const;
+  static std::string planner_config_string(const gd_rhcr_planner::PlannerConfig& c);
 
   // With mutex_ held.
   void publish_events_locked();
@@ -130,8 +122,10 @@ class PlannerNode {
   double cell_size_ = 1.0, tick_rate_ = 2.0, plan_deadline_ = 0, offline_timeout_ = 2.0;
   int num_robots_ = 0, label_limit_ = 60, dist_budget_mb_ = 256;
   uint64_t seed_ = 1;
-  bool per_robot_topics_ = false, publish_markers_ = true;
+  bool per_robot_topics_ = false, publish_markers_ = true, show_goal_lines_ = false;
   gdrhcr::Params planner_params_;
+  std::string dispatcher_name_ = "batch";
+  DispatchParams dispatch_params_;
 
   // The core.
   std::unique_ptr<LoadedMap> map_;
@@ -151,18 +145,39 @@ class PlannerNode {
   std::unique_ptr<Executor> executor_;
   double first_report_s_ = 0;  // when the first robot reported (missing robots are waited for a while)
   std::deque<double> tick_stamps_;  // wall times of recent published ticks, for the rate
-  double plan_time_sum_ = 0, plan_time_max_ = 0, step_time_max_ = 0;
+  double plan_time_sum_ = 0, plan_time_max_ = 0, step_time_max_ = 0, last_plan_time_ = 0;
   int plan_time_count_ = 0;
   std::string last_problem_;  // the latest problem, kept after it is over (see its tick)
   uint64_t last_problem_tick_ = 0;
 
+  // Issue 14. Guarded by mutex_ unless noted.
+  std::unique_ptr<Dispatcher> dispatcher_;
+  DispatchStats dispatch_stats_;
+  std::unique_ptr<OperatorControl> operator_;
+  std::unique_ptr<FleetMarkers> markers_;
+  ThroughputMeter throughput_;
+  HealthMonitor health_;
+  std::unique_ptr<diagnostic_updater::Updater> updater_;  // main thread
+  double tick_freq_min_ = 0, tick_freq_max_ = 0;
+  std::unique_ptr<diagnostic_updater::FrequencyStatus> tick_freq_;  // internally locked
+  std::unique_ptr<diagnostic_updater::TimeStampStatus> tick_stamp_;  // internally locked
+  std::unique_ptr<dynamic_reconfigure::Server<gd_rhcr_planner::PlannerConfig>> reconfigure_;
+  boost::recursive_mutex reconfigure_mutex_;
+  gd_rhcr_planner::PlannerConfig live_config_;     // what the node runs with
+  bool config_pending_ = false;                    // a change waits for the next tick
+  gd_rhcr_planner::PlannerConfig pending_config_;
+  std::unique_ptr<gdrhcr::Planner> pending_planner_;  // built by on_reconfigure, swapped in by on_tick
+  uint64_t reconfigures_ = 0;
+  gdrhcr::Params base_params_;  // planner parameters from the start, without the reconfigurable ones
+
   ros::Publisher commands_pub_, status_pub_, map_pub_, mapd_pub_, markers_pub_, stats_pub_,
-      groups_pub_, diag_pub_;
+      groups_pub_;
   std::vector<ros::Publisher> robot_pubs_;
   ros::Subscriber states_sub_, tasks_sub_;
-  ros::ServiceServer submit_srv_, cancel_srv_, list_srv_;
+  ros::ServiceServer submit_srv_, cancel_srv_, list_srv_, pause_srv_, estop_srv_;
   std::unique_ptr<DeliveryServer> action_;
   ros::Timer tick_timer_, diag_timer_;
+  ros::WallTime started_ = ros::WallTime::now();
 };
 
 void PlannerNode::load_parameters() {
@@ -184,6 +199,14 @@ void PlannerNode::load_parameters() {
   pnh_.param("offline_timeout", offline_timeout_, 2.0);
   pnh_.param("execution", execution_, std::string("adg"));    // issue 13: adg | lockstep
   pnh_.param("commit_horizon", commit_horizon_, 1);
+  pnh_.param("show_goal_lines", show_goal_lines_, false);
+  pnh_.param("dispatcher", dispatcher_name_, std::string("batch"));
+  parse_dispatch_policy(dispatcher_name_);  // throws naming a bad value
+  pnh_.param("dispatch_finish_horizon", dispatch_params_.finish_horizon, dispatch_params_.finish_horizon);
+  pnh_.param("dispatch_switch_margin", dispatch_params_.switch_margin, dispatch_params_.switch_margin);
+  pnh_.param("dispatch_max_tasks", dispatch_params_.max_tasks, dispatch_params_.max_tasks);
+  pnh_.param("dispatch_age_weight", dispatch_params_.age_weight, dispatch_params_.age_weight);
+  dispatch_params_.validate();
   if (!pnh_.getParam("task_store", task_store_path_) || task_store_path_ == "default")
     task_store_path_ = default_task_store();
   if (task_store_path_ == "none") task_store_path_.clear();
@@ -204,11 +227,34 @@ void PlannerNode::load_parameters() {
     if (std::string(name) == "K_threshold" && v.getType() == XmlRpc::XmlRpcValue::TypeInt && static_cast<int>(v) == 0)
       continue;
     planner_params_.set(name, xmlrpc_to_string(v));
+    const std::string n(name);
+    if (n != "V" && n != "H" && n != "c_soft" && n != "K_threshold") base_params_.set(name, xmlrpc_to_string(v));
   }
   XmlRpc::XmlRpcValue extra;
   if (pnh_.getParam("planner_params", extra) && extra.getType() == XmlRpc::XmlRpcValue::TypeStruct) {
-    for (auto it = extra.begin(); it != extra.end(); ++it) planner_params_.set(it->first, xmlrpc_to_string(it->second));
+    for (auto it = extra.begin(); it != extra.end(); ++it) {
+      planner_params_.set(it->first, xmlrpc_to_string(it->second));
+      const std::string c = gdrhcr::Params::canonical(it->first);
+      if (c != "solver" && c != "solver2") base_params_.set(it->first, xmlrpc_to_string(it->second));
+    }
   }
+  // The live values (dynamic_reconfigure starts from the same parameters).
+  live_config_ = gd_rhcr_planner::PlannerConfig::__getDefault__();
+  pnh_.getParam("V", live_config_.V);
+  pnh_.getParam("H", live_config_.H);
+  pnh_.getParam("c_soft", live_config_.c_soft);
+  pnh_.getParam("K_threshold", live_config_.K_threshold);
+  if (extra.getType() == XmlRpc::XmlRpcValue::TypeStruct) {
+    if (extra.hasMember("solver")) live_config_.solver = xmlrpc_to_string(extra["solver"]);
+    if (extra.hasMember("solver2")) live_config_.solver2 = xmlrpc_to_string(extra["solver2"]);
+  }
+  pnh_.getParam("solver", live_config_.solver);
+  pnh_.getParam("solver2", live_config_.solver2);
+  live_config_.plan_deadline = plan_deadline_;
+  live_config_.offline_timeout = offline_timeout_;
+  live_config_.dispatcher = dispatcher_name_;
+  live_config_.dispatch_switch_margin = dispatch_params_.switch_margin;
+  live_config_.dispatch_finish_horizon = dispatch_params_.finish_horizon;
 }
 
 // $ROS_HOME (else ~/.ros)/gd_rhcr_planner/<node name>.tasks.jsonl: one store per planner node,
@@ -250,6 +296,9 @@ void PlannerNode::init() {
     ec.dist_budget_bytes = size_t(dist_budget_mb_) << 20;
     executor_ = std::make_unique<Executor>(grid, *dist_, num_robots_, ec);
   }
+  dispatcher_ = std::make_unique<Dispatcher>(parse_dispatch_policy(dispatcher_name_), dispatch_params_);
+  fleet_->set_auto_assign(false);  // the dispatcher assigns (both policies)
+  operator_ = std::make_unique<OperatorControl>(num_robots_);
   if (!task_store_path_.empty()) {
     store_ = std::make_unique<TaskStore>(task_store_path_);  // throws on a damaged store
     const auto& saved = store_->loaded();
@@ -272,10 +321,37 @@ void PlannerNode::init() {
   status_pub_ = nh_.advertise<gd_rhcr_msgs::TaskStatus>("task_status", 1000);
   map_pub_ = nh_.advertise<nav_msgs::OccupancyGrid>("map", 1, true);
   mapd_pub_ = nh_.advertise<gd_rhcr_msgs::MapdCells>("mapd_cells", 1, true);
-  markers_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("fleet_markers", 1, true);
   stats_pub_ = nh_.advertise<gd_rhcr_msgs::PlannerStats>("planner_stats", 10);
   groups_pub_ = nh_.advertise<gd_rhcr_msgs::GroupArray>("planner_groups", 10);
-  diag_pub_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
+  // Markers are latched and sent as changes; a new subscriber first gets the whole picture.
+  markers_pub_ = nh_.advertise<visualization_msgs::MarkerArray>(
+      "fleet_markers", 1, [this](const ros::SingleSubscriberPublisher& sub) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!markers_ || markers_->current().empty()) return;
+        visualization_msgs::MarkerArray all;
+        all.markers = markers_->current();
+        sub.publish(all);
+      }, ros::SubscriberStatusCallback(), ros::VoidConstPtr(), true);
+  MarkerStyle style;
+  style.frame_id = frame_id_;
+  style.label_limit = label_limit_;
+  style.show_goal_lines = show_goal_lines_;
+  markers_ = std::make_unique<FleetMarkers>(grid, map_->frame, style);
+  markers_->set_stations(mapd_.pickups, mapd_.deliveries);
+  // diagnostic_updater on /diagnostics: the planner's health and the tick's frequency and stamps.
+  updater_ = std::make_unique<diagnostic_updater::Updater>();
+  updater_->setHardwareID("gd_rhcr_fleet" + nh_.getNamespace());
+  updater_->add("planner", this, &PlannerNode::diagnose);
+  tick_freq_min_ = 0.9 * tick_rate_;
+  tick_freq_max_ = 1.1 * tick_rate_;
+  tick_freq_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
+      diagnostic_updater::FrequencyStatusParam(&tick_freq_min_, &tick_freq_max_, 0.05, 10), "tick rate");
+  tick_stamp_ = std::make_unique<diagnostic_updater::TimeStampStatus>(
+      diagnostic_updater::TimeStampStatusParam(-1.0, 1.0 / tick_rate_ + 0.1), "tick stamps");
+  updater_->add(*tick_freq_);
+  updater_->add(*tick_stamp_);
+  pause_srv_ = nh_.advertiseService("set_paused", &PlannerNode::on_set_paused, this);
+  estop_srv_ = nh_.advertiseService("emergency_stop", &PlannerNode::on_emergency_stop, this);
   if (per_robot_topics_)
     for (int r = 0; r < num_robots_; ++r)
       robot_pubs_.push_back(
@@ -296,7 +372,10 @@ void PlannerNode::start_timers(ros::CallbackQueue* tick_queue) {
   ros::TimerOptions opts(ros::Duration(1.0 / tick_rate_),
                          [this](const ros::TimerEvent& ev) { on_tick(ev); }, tick_queue);
   tick_timer_ = nh_.createTimer(opts);
-  diag_timer_ = nh_.createTimer(ros::Duration(1.0), &PlannerNode::on_diagnostics, this);
+  diag_timer_ = nh_.createTimer(ros::Duration(0.25), [this](const ros::TimerEvent&) { updater_->update(); });
+  // Live tuning; the first callback brings the server's starting values (the same parameters).
+  reconfigure_ = std::make_unique<dynamic_reconfigure::Server<gd_rhcr_planner::PlannerConfig>>(reconfigure_mutex_, pnh_);
+  reconfigure_->setCallback([this](gd_rhcr_planner::PlannerConfig& c, uint32_t level) { on_reconfigure(c, level); });
 }
 
 geometry_msgs::Pose PlannerNode::pose_of(Cell c) const {
@@ -484,12 +563,15 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
   const double period = 1.0 / tick_rate_;
   std::vector<Cell> pos, next;
   std::vector<std::vector<Cell>> goals;
+  std::vector<uint8_t> held;
   std::vector<RobotRecord> robots;
   bool proceed_without_missing = false;
   uint64_t tick;
+  std::unique_ptr<DeadlinePlanner> retired;  // a planner replaced by reconfigure, destroyed unlocked
   {
     std::lock_guard<std::mutex> lock(mutex_);
     tick = ++tick_;
+    apply_reconfigure_locked(retired);
     for (int r : fleet_->mark_silent(ros::Time::now().toSec(), offline_timeout_))
       ROS_WARN("robot %d sent no state for %.1f s: offline (an obstacle at its last cell); its task is requeued",
                r, offline_timeout_);
@@ -505,18 +587,23 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
       ROS_WARN_THROTTLE(10.0, "%s", last_problem_.c_str());
     }
     fleet_->advance();
+    dispatch_stats_ = dispatcher_->dispatch(*fleet_, *dist_, operator_->unavailable());
     publish_events_locked();
     fleet_->fill_positions(pos);
     fleet_->fill_goals(goals);
+    held.assign(pos.size(), 0);
     robots.reserve(pos.size());
-    for (int r = 0; r < fleet_->num_robots(); ++r) robots.push_back(fleet_->robot(r));
+    for (int r = 0; r < fleet_->num_robots(); ++r) {
+      robots.push_back(fleet_->robot(r));
+      held[r] = operator_->holds(r);  // paused, emergency stop: no new move
+    }
   }
 
   // Liveness, planning, reservation, commitment and validation: the execution layer (ADG or
   // lock-step, execution.hpp), outside the lock, so services and state updates keep flowing.
   const auto& grid = map_->grid;
   executor_->set_plan_deadline(plan_deadline_);
-  TickOutput exec = executor_->tick(robots, goals, *planner_, proceed_without_missing);
+  TickOutput exec = executor_->tick(robots, goals, *planner_, proceed_without_missing, &held);
   if (!exec.stepped) {
     std::lock_guard<std::mutex> lock(mutex_);
     ++skipped_;
@@ -597,10 +684,12 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     c.next_x = grid.x_of(next[r]);
     c.next_y = grid.y_of(next[r]);
     c.target_pose = pose_of(next[r]);
-    c.mode = fleet_->mode(r);
+    c.mode = operator_->mode(r, fleet_->mode(r));
     c.task_id = fleet_->task_of(r);
   }
   commands_pub_.publish(cmds);
+  tick_freq_->tick();
+  tick_stamp_->tick(cmds.header.stamp);
   for (const auto& c : cmds.commands)
     if (c.robot_id < robot_pubs_.size()) robot_pubs_[c.robot_id].publish(c);
 
@@ -612,6 +701,7 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     ++overruns_;
     ROS_WARN_THROTTLE(2.0, "tick %lu took %.3f s, longer than the period %.3f s", (unsigned long)tick, step_time, period);
   }
+  last_plan_time_ = report.plan_time_s;
   plan_time_sum_ += report.plan_time_s;
   plan_time_max_ = std::max(plan_time_max_, report.plan_time_s);
   step_time_max_ = std::max(step_time_max_, step_time);
@@ -639,10 +729,42 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
   st.offline_robots = fleet_->offline_count();
   if (primary) {
     try {
-      st.planner_stats_json = primary->stats().dump();
+      const auto js = primary->stats();
+      st.planner_stats_json = js.dump();
+      const PlannerFigures f = planner_figures(js);
+      st.solver_calls = f.solver_calls;
+      st.solver_failures = f.solver_failures;
+      st.solver_timeouts = f.solver_timeouts;
+      st.pbs_nodes = f.pbs_nodes;
+      st.solver_time_mean = f.solver_time_mean;
+      st.groups_replanned_per_step = f.groups_replanned_per_step;
+      st.cache_reuses = f.cache_reuses;
+      st.threshold_fallbacks = f.threshold_fallbacks;
+      st.failure_fallbacks = f.failure_fallbacks;
+      st.repairs = f.repairs;
     } catch (const std::exception&) {
     }
   }
+  throughput_.add(ros::WallTime::now().toSec(), fleet_->delivered_total());
+  st.planner_config = planner_config_string(live_config_);
+  st.reconfigures = reconfigures_;
+  st.deliveries_per_minute = throughput_.per_minute();
+  size_t members = 0;
+  for (auto& g : groups_msg.groups) {
+    members += g.members.size();
+    st.group_size_max = std::max<uint32_t>(st.group_size_max, g.members.size());
+  }
+  st.group_size_mean = groups_msg.groups.empty() ? 0.0 : double(members) / groups_msg.groups.size();
+  st.dispatcher = dispatch_policy_name(dispatcher_->policy());
+  st.dispatch_robots = dispatch_stats_.robots;
+  st.dispatch_tasks = dispatch_stats_.tasks;
+  st.dispatch_assigned = dispatch_stats_.assigned;
+  st.dispatch_reassigned = dispatch_stats_.reassigned;
+  st.dispatch_reserved = dispatch_stats_.reserved;
+  st.dispatch_travel = dispatch_stats_.travel;
+  st.dispatch_time = dispatch_stats_.time_s;
+  st.paused_robots = operator_->paused_count();
+  st.emergency_stop = operator_->emergency_stop();
   stats_pub_.publish(st);
   if (!groups_msg.groups.empty()) {
     groups_msg.header = cmds.header;
@@ -650,181 +772,207 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     groups_pub_.publish(groups_msg);
   }
   if (publish_markers_) publish_markers_locked(pos, next, goals, group_of, planned);
+  if (retired) ROS_DEBUG("tick %lu: previous planner retired", (unsigned long)tick);
 }
 
 void PlannerNode::publish_markers_locked(const std::vector<Cell>& pos, const std::vector<Cell>& next,
                                          const std::vector<std::vector<Cell>>& goals,
                                          const std::vector<int>& group_of,
                                          const std::vector<std::vector<Cell>>& planned_paths) {
-  const double res = map_->frame.resolution;
-  visualization_msgs::MarkerArray arr;
-  auto base = [&](const std::string& ns, int type) {
-    visualization_msgs::Marker m;
-    m.header.frame_id = frame_id_;
-    m.header.stamp = ros::Time::now();
-    m.ns = ns;
-    m.id = 0;
-    m.type = type;
-    m.action = visualization_msgs::Marker::ADD;
-    m.pose.orientation.w = 1.0;
-    m.frame_locked = false;
-    return m;
-  };
-  // Robots, one colour per group (one group per robot when the planner reports none).
-  auto robots = base("robots", visualization_msgs::Marker::SPHERE_LIST);
-  robots.scale.x = robots.scale.y = robots.scale.z = 0.8 * res;
-  // Next cells (the planned step) as line segments, goals as small cubes.
-  auto steps = base("planned_steps", visualization_msgs::Marker::LINE_LIST);
-  steps.scale.x = 0.15 * res;
-  steps.color = rgba(1, 1, 1, 0.9);
-  auto goal_m = base("goals", visualization_msgs::Marker::CUBE_LIST);
-  goal_m.scale.x = goal_m.scale.y = 0.35 * res;
-  goal_m.scale.z = 0.1 * res;
-  auto paths = base("goal_lines", visualization_msgs::Marker::LINE_LIST);
-  paths.scale.x = 0.05 * res;
+  FleetView v;
+  v.pos = pos;
+  v.next = next;
+  v.group_of = group_of;
+  v.paths = planned_paths;
+  v.goal.resize(pos.size(), gdrhcr::kNoCell);
+  v.offline.resize(pos.size());
+  v.held.resize(pos.size());
   for (size_t r = 0; r < pos.size(); ++r) {
-    const auto colour = palette(group_of[r]);
-    robots.points.push_back(point_of(pos[r], 0.4 * res));
-    robots.colors.push_back(fleet_->robot(r).offline ? rgba(0.3, 0.3, 0.3, 1) : colour);
-    if (next[r] != pos[r]) {
-      steps.points.push_back(point_of(pos[r], 0.45 * res));
-      steps.points.push_back(point_of(next[r], 0.45 * res));
-    }
-    if (!goals[r].empty() && goals[r][0] != pos[r]) {
-      goal_m.points.push_back(point_of(goals[r][0], 0.05 * res));
-      goal_m.colors.push_back(colour);
-      paths.points.push_back(point_of(pos[r], 0.3 * res));
-      paths.points.push_back(point_of(goals[r][0], 0.05 * res));
-      auto faint = colour;
-      faint.a = 0.35;
-      paths.colors.push_back(faint);
-      paths.colors.push_back(faint);
-    }
+    if (!goals[r].empty()) v.goal[r] = goals[r][0];
+    v.offline[r] = fleet_->robot(r).offline;
+    v.held[r] = operator_->paused(static_cast<int>(r));
   }
-  arr.markers.push_back(robots);
-  arr.markers.push_back(steps);
-  arr.markers.push_back(goal_m);
-  arr.markers.push_back(paths);
-  {  // the planner's paths (GD-RHCR, RHCR); kept empty on fallback ticks and for PIBT
-    auto planned = base("planned_paths", visualization_msgs::Marker::LINE_LIST);
-    planned.scale.x = 0.08 * res;
-    for (size_t r = 0; r < planned_paths.size(); ++r) {
-      const auto& path = planned_paths[r];
-      auto colour = palette(group_of[r], 0.7f);
-      for (size_t t = 1; t < path.size(); ++t) {
-        if (path[t] == path[t - 1]) continue;
-        planned.points.push_back(point_of(path[t - 1], 0.2 * res));
-        planned.points.push_back(point_of(path[t], 0.2 * res));
-        planned.colors.push_back(colour);
-        planned.colors.push_back(colour);
-      }
-    }
-    arr.markers.push_back(planned);
-  }
-  // Pickup (orange) and delivery (green) cells of the open tasks.
-  auto pick = base("pickups", visualization_msgs::Marker::CUBE_LIST);
-  pick.scale.x = pick.scale.y = 0.9 * res;
-  pick.scale.z = 0.02 * res;
-  pick.color = rgba(1.0, 0.55, 0.0, 0.6);
-  auto drop = pick;
-  drop.ns = "deliveries";
-  drop.color = rgba(0.1, 0.8, 0.2, 0.6);
+  v.emergency_stop = operator_->emergency_stop();
+  size_t open = 0, queued = 0;
   for (auto& [id, t] : fleet_->tasks()) {
     if (task_finished(t.state)) continue;
-    if (t.state != kPicked) pick.points.push_back(point_of(t.pickup, 0.01 * res));
-    drop.points.push_back(point_of(t.delivery, 0.01 * res));
+    ++open;
+    queued += t.state == kQueued;
+    if (t.state != kPicked) v.task_pickups.push_back(t.pickup);
+    else v.task_deliveries.push_back(t.delivery);
   }
-  arr.markers.push_back(pick);
-  arr.markers.push_back(drop);
-  // Labels for small fleets.
-  if (static_cast<int>(pos.size()) <= label_limit_) {
-    for (size_t r = 0; r < pos.size(); ++r) {
-      auto label = base("labels", visualization_msgs::Marker::TEXT_VIEW_FACING);
-      label.id = static_cast<int>(r);
-      label.pose.position = point_of(pos[r], 1.1 * res);
-      label.scale.z = 0.6 * res;
-      label.color = rgba(1, 1, 1, 1);
-      label.text = std::to_string(r);
-      arr.markers.push_back(label);
-    }
-  }
-  // Empty point lists are invalid for rviz; drop those markers by DELETE.
-  for (auto& m : arr.markers)
-    if ((m.type == visualization_msgs::Marker::LINE_LIST || m.type == visualization_msgs::Marker::CUBE_LIST ||
-         m.type == visualization_msgs::Marker::SPHERE_LIST) && m.points.empty())
-      m.action = visualization_msgs::Marker::DELETE;
-  markers_pub_.publish(arr);
+  int groups = 0;
+  for (size_t r = 0; r < group_of.size(); ++r) groups = std::max(groups, group_of[r] + 1);
+  v.overlay = FleetMarkers::overlay_text(tick_, throughput_.per_minute(), open, queued, groups,
+                                         plan_time_count_ ? last_plan_time_ : 0.0, planner_name_,
+                                         dispatch_policy_name(dispatcher_->policy()), operator_->summary());
+  auto arr = markers_->update(v);
+  const ros::Time now = ros::Time::now();
+  for (auto& m : arr.markers) m.header.stamp = now;
+  if (!arr.markers.empty()) markers_pub_.publish(arr);
 }
 
-void PlannerNode::on_diagnostics(const ros::TimerEvent&) {
+void PlannerNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
   std::lock_guard<std::mutex> lock(mutex_);
-  diagnostic_msgs::DiagnosticArray arr;
-  arr.header.stamp = ros::Time::now();
-  diagnostic_msgs::DiagnosticStatus s;
-  s.name = ros::this_node::getName() + ": planner";
-  s.hardware_id = "gd_rhcr_fleet";
-  const double now_s = ros::WallTime::now().toSec();
-  double rate = 0;
-  if (tick_stamps_.size() >= 2 && now_s - tick_stamps_.front() < 6.0)
-    rate = (tick_stamps_.size() - 1) / (tick_stamps_.back() - tick_stamps_.front());
-  static uint64_t last_overruns = 0, last_invalid = 0, last_fallbacks = 0;
-  const bool new_overruns = overruns_ > last_overruns, new_invalid = invalid_plans_ > last_invalid;
-  const bool new_fallbacks = fallback_ticks_ > last_fallbacks;
-  last_overruns = overruns_, last_invalid = invalid_plans_, last_fallbacks = fallback_ticks_;
-  if (!fleet_->all_reported()) {
-    s.level = diagnostic_msgs::DiagnosticStatus::WARN;
-    s.message = std::to_string(fleet_->missing_robots()) + " robots not reporting";
-  } else if (new_invalid) {
-    s.level = diagnostic_msgs::DiagnosticStatus::ERROR;
-    s.message = "planner step rejected; robots held";
-  } else if (store_ && store_errors_ > 0) {
-    s.level = diagnostic_msgs::DiagnosticStatus::ERROR;
-    s.message = "task store write failed";
-  } else if (new_overruns) {
-    s.level = diagnostic_msgs::DiagnosticStatus::WARN;
-    s.message = "tick overruns";
-  } else if (new_fallbacks) {
-    s.level = diagnostic_msgs::DiagnosticStatus::WARN;
-    s.message = "planner missed its deadline; PIBT fallback ticks";
-  } else {
-    s.level = diagnostic_msgs::DiagnosticStatus::OK;
-    s.message = "planning";
-  }
-  auto kv = [&](const std::string& k, const std::string& v) {
-    diagnostic_msgs::KeyValue x;
-    x.key = k;
-    x.value = v;
-    s.values.push_back(x);
-  };
-  kv("planner", planner_name_);
-  kv("tick", std::to_string(tick_));
-  kv("tick rate target (Hz)", std::to_string(tick_rate_));
-  kv("tick rate measured (Hz)", std::to_string(rate));
-  kv("plan time mean (s)", std::to_string(plan_time_count_ ? plan_time_sum_ / plan_time_count_ : 0.0));
-  kv("plan time max (s)", std::to_string(plan_time_max_));
-  kv("tick callback max (s)", std::to_string(step_time_max_));
-  kv("overruns", std::to_string(overruns_));
-  kv("plan deadline (s)", std::to_string(plan_deadline_));
-  kv("fallback ticks", std::to_string(fallback_ticks_));
-  kv("deadline misses", std::to_string(late_ticks_));
-  kv("planner errors", std::to_string(planner_errors_));
-  kv("offline robots", std::to_string(fleet_->offline_count()));
-  kv("task store", store_ ? store_->path() : std::string("off"));
-  kv("task store errors", std::to_string(store_errors_));
-  kv("skipped ticks", std::to_string(skipped_));
-  kv("rejected plans", std::to_string(invalid_plans_));
-  kv("ignored robot reports", std::to_string(bad_reports_));
+  HealthCounters c;
+  c.overruns = overruns_;
+  c.rejected_plans = invalid_plans_;
+  c.fallback_ticks = fallback_ticks_;
+  c.store_errors = store_errors_;
+  c.skipped_ticks = skipped_;
+  c.missing_robots = fleet_->missing_robots();
+  c.offline_robots = fleet_->offline_count();
+  c.paused_robots = operator_->paused_count();
+  c.emergency_stop = operator_->emergency_stop();
+  const Health h = health_.update(c);
+  s.summary(h.level, h.message);
+  s.add("planner", planner_name_);
+  s.add("planner config", planner_config_string(live_config_));
+  s.add("dispatcher", dispatcher_->policy() == DispatchPolicy::kBatch ? "batch" : "greedy");
+  s.add("operator", operator_->summary());
+  s.add("tick", tick_);
+  s.add("tick rate target (Hz)", tick_rate_);
+  s.add("plan time mean (s)", plan_time_count_ ? plan_time_sum_ / plan_time_count_ : 0.0);
+  s.add("plan time max (s)", plan_time_max_);
+  s.add("tick callback max (s)", step_time_max_);
+  s.add("overruns", overruns_);
+  s.add("plan deadline (s)", plan_deadline_);
+  s.add("offline timeout (s)", offline_timeout_);
+  s.add("fallback ticks", fallback_ticks_);
+  s.add("deadline misses", late_ticks_);
+  s.add("planner errors", planner_errors_);
+  s.add("offline robots", fleet_->offline_count());
+  s.add("paused robots", operator_->paused_count());
+  s.add("task store", store_ ? store_->path() : std::string("off"));
+  s.add("task store errors", store_errors_);
+  s.add("skipped ticks", skipped_);
+  s.add("rejected plans", invalid_plans_);
+  s.add("ignored robot reports", bad_reports_);
   // Memory that grows by design up to a bound: the distance rows (dist_budget_mb) and the
   // finished tasks kept for list_tasks (the newest 10000).
-  kv("distance rows cached", std::to_string(dist_->cached_rows()));
-  kv("distance cache (MB)", std::to_string(dist_->cached_bytes() / 1048576.0));
-  kv("tasks known", std::to_string(fleet_->tasks().size()));
-  kv("tasks delivered", std::to_string(fleet_->delivered_total()));
-  kv("tasks failed", std::to_string(fleet_->failed_total()));
-  kv("last problem", last_problem_.empty() ? "none" : last_problem_);
-  kv("last problem at tick", std::to_string(last_problem_tick_));
-  arr.status.push_back(s);
-  diag_pub_.publish(arr);
+  s.add("distance rows cached", dist_->cached_rows());
+  s.add("distance cache (MB)", dist_->cached_bytes() / 1048576.0);
+  s.add("tasks known", fleet_->tasks().size());
+  s.add("tasks delivered", fleet_->delivered_total());
+  s.add("tasks failed", fleet_->failed_total());
+  s.add("deliveries per minute", throughput_.per_minute());
+  s.add("planner reconfigurations", reconfigures_);
+  s.add("last problem", last_problem_.empty() ? "none" : last_problem_);
+  s.add("last problem at tick", last_problem_tick_);
+}
+
+bool PlannerNode::on_set_paused(gd_rhcr_msgs::SetPaused::Request& req, gd_rhcr_msgs::SetPaused::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const std::string err = operator_->set_paused(req.robot_id, req.paused);
+  res.success = err.empty();
+  res.message = err.empty() ? operator_->summary() : err;
+  if (err.empty())
+    ROS_INFO("operator: %s %s; now %s", req.paused ? "pause" : "resume",
+             req.robot_id < 0 ? "fleet" : ("robot " + std::to_string(req.robot_id)).c_str(), res.message.c_str());
+  else
+    ROS_WARN("set_paused refused: %s", err.c_str());
+  return true;
+}
+
+bool PlannerNode::on_emergency_stop(gd_rhcr_msgs::EmergencyStop::Request& req,
+                                    gd_rhcr_msgs::EmergencyStop::Response& res) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    operator_->set_emergency_stop(req.engage);
+    res.success = true;
+    res.message = operator_->summary();
+  }
+  if (req.engage) ROS_WARN("operator: EMERGENCY STOP engaged; every robot holds, tasks are kept");
+  else ROS_INFO("operator: emergency stop released; now %s", res.message.c_str());
+  updater_->force_update();  // diagnose() takes mutex_ itself
+  return true;
+}
+
+std::string PlannerNode::planner_config_string(const gd_rhcr_planner::PlannerConfig& c) {
+  std::ostringstream o;
+  o << "V=" << c.V << " H=" << c.H << " c_soft=" << c.c_soft << " K_threshold=" << c.K_threshold
+    << " solver=" << c.solver << " solver2=" << c.solver2;
+  return o.str();
+}
+
+gdrhcr::Params PlannerNode::planner_params_for(const gd_rhcr_planner::PlannerConfig& c) const {
+  gdrhcr::Params p = base_params_;
+  p.set("V", std::to_string(c.V));
+  p.set("H", std::to_string(c.H));
+  std::ostringstream cs;
+  cs.precision(17);
+  cs << c.c_soft;
+  p.set("c_soft", cs.str());
+  if (c.K_threshold > 0) p.set("K_threshold", std::to_string(c.K_threshold));
+  p.set("solver", c.solver);
+  p.set("solver2", c.solver2);
+  return p;
+}
+
+// dynamic_reconfigure (main thread). Values are checked here; a bad one is put back to the live
+// value (the server then shows what runs) and logged. Changes apply at the start of the next tick.
+void PlannerNode::on_reconfigure(gd_rhcr_planner::PlannerConfig& c, uint32_t) {
+  const double period = 1.0 / tick_rate_;
+  std::unique_ptr<gdrhcr::Planner> fresh;
+  gd_rhcr_planner::PlannerConfig live;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    live = config_pending_ ? pending_config_ : live_config_;
+  }
+  if (c.plan_deadline == 0) c.plan_deadline = 0.7 * period;
+  if (!(c.plan_deadline > 0 && c.plan_deadline <= period)) {
+    ROS_ERROR("reconfigure: plan_deadline %.3f s is outside (0, 1/tick_rate = %.3f s]; keeping %.3f s",
+              c.plan_deadline, period, live.plan_deadline);
+    c.plan_deadline = live.plan_deadline;
+  }
+  try {
+    parse_dispatch_policy(c.dispatcher);
+  } catch (const std::exception& e) {
+    ROS_ERROR("reconfigure: %s; keeping %s", e.what(), live.dispatcher.c_str());
+    c.dispatcher = live.dispatcher;
+  }
+  if (planner_config_string(c) != planner_config_string(live)) {
+    try {
+      gdrhcr::Params p = planner_params_for(c);
+      fresh = gdrhcr::make_planner(planner_name_, p, map_->grid, num_robots_, seed_);
+    } catch (const std::exception& e) {
+      ROS_ERROR("reconfigure: planner parameters rejected (%s); keeping %s", e.what(),
+                planner_config_string(live).c_str());
+      c.V = live.V, c.H = live.H, c.c_soft = live.c_soft, c.K_threshold = live.K_threshold;
+      c.solver = live.solver, c.solver2 = live.solver2;
+    }
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (fresh) pending_planner_ = std::move(fresh);
+  pending_config_ = c;
+  config_pending_ = true;
+}
+
+// At the start of a tick, with mutex_ held: the planner built by on_reconfigure replaces the
+// running one (tasks stay in the Fleet; the new planner plans from the robots' cells). The old
+// one is handed back to be destroyed outside the lock (it may wait for an abandoned step).
+void PlannerNode::apply_reconfigure_locked(std::unique_ptr<DeadlinePlanner>& retired) {
+  if (!config_pending_) return;
+  config_pending_ = false;
+  const auto& c = pending_config_;
+  if (pending_planner_) {
+    gdrhcr::Params no_params;
+    retired = std::move(planner_);
+    planner_ = std::make_unique<DeadlinePlanner>(
+        std::move(pending_planner_), gdrhcr::make_planner("pibt", no_params, map_->grid, num_robots_, seed_));
+    ++reconfigures_;
+    ROS_INFO("reconfigure: planner %s now runs with %s (tick %lu)", planner_name_.c_str(),
+             planner_config_string(c).c_str(), (unsigned long)tick_);
+  }
+  plan_deadline_ = c.plan_deadline;
+  offline_timeout_ = c.offline_timeout;
+  DispatchParams dp = dispatcher_->params();
+  dp.switch_margin = c.dispatch_switch_margin;
+  dp.finish_horizon = c.dispatch_finish_horizon;
+  if (c.dispatcher != dispatch_policy_name(dispatcher_->policy()) || dp.switch_margin != dispatcher_->params().switch_margin ||
+      dp.finish_horizon != dispatcher_->params().finish_horizon)
+    dispatcher_ = std::make_unique<Dispatcher>(parse_dispatch_policy(c.dispatcher), dp);
+  live_config_ = c;
 }
 
 }  // namespace
