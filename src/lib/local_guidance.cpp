@@ -105,6 +105,42 @@ bool LocalGuidance::is_valid(const WorldView& world, int i) const {
   return true;
 }
 
+// Replanning every step (lazy = false) would return an equally cheap path for an agent whose
+// kept path meets nobody and approaches the goal by one every step: no path can do better. Such
+// a path is kept and, if it stops short of the goal, extended by conflict-free steps towards the
+// goal up to the window; otherwise (or if no such step exists) the agent is replanned.
+bool LocalGuidance::still_optimal(const WorldView& world, int i) {
+  auto& p = path_[i];
+  if (p.size() < 2 || start_[i] != world.timestep || p[0] != world.positions[i]) return false;
+  const Cell goal = world.goals[i].empty() ? world.positions[i] : world.goals[i][0];
+  if (goal_[i] != goal) return false;
+  const size_t cells = grid_.num_cells();
+  const auto row_ptr = world.dist.row(goal);
+  const DistRow& row = *row_ptr;
+  const int h0 = row[p[0]];
+  for (size_t k = 1; k < p.size(); ++k) {
+    if (row[p[k]] != h0 - static_cast<int>(k)) return false;
+    if (at_[slot(start_[i] + k) * cells + p[k]] > 1) return false;
+    if (leaving_[(slot(start_[i] + k - 1) * cells + p[k]) * 4 + dir(p[k], p[k - 1])] > 0) return false;
+  }
+  while (p.back() != goal && static_cast<int>(p.size()) < cfg_.window + 1) {
+    const Cell last = p.back();
+    const int t_last = start_[i] + static_cast<int>(p.size()) - 1;
+    Cell options[4];
+    int m = 0;
+    for (Cell u : grid_.neighbours(last))
+      if (row[u] == row[last] - 1 && at_[slot(t_last + 1) * cells + u] == 0 &&
+          leaving_[(slot(t_last) * cells + u) * 4 + dir(u, last)] == 0)
+        options[m++] = u;
+    if (m == 0) return false;
+    const Cell u = options[m == 1 ? 0 : rng_() % m];
+    p.push_back(u);
+    at_[slot(t_last + 1) * cells + u] += 1;
+    leaving_[(slot(t_last) * cells + last) * 4 + dir(last, u)] += 1;
+  }
+  return true;
+}
+
 void LocalGuidance::update(const WorldView& world, const std::vector<int>& agents,
                            std::chrono::steady_clock::time_point deadline) {
   const int now = world.timestep;
@@ -112,7 +148,10 @@ void LocalGuidance::update(const WorldView& world, const std::vector<int>& agent
   for (size_t i = 0; i < path_.size(); ++i) drop_past(static_cast<int>(i), now);
   for (size_t k = 0; k < agents.size(); ++k) {
     const int i = agents[k];
-    if (is_valid(world, i)) continue;
+    if (cfg_.lazy ? is_valid(world, i) : (cfg_.keep_optimal && still_optimal(world, i))) {
+      ++kept_;
+      continue;
+    }
     enroll(i, -1);
     path_[i].clear();
     if (timed && (k % 16) == 0 && std::chrono::steady_clock::now() >= deadline) {
@@ -154,19 +193,17 @@ void LocalGuidance::plan(const WorldView& world, int i) {
   }
   nodes_.clear();
   open_.clear();
-  auto worse = [&](int32_t a, int32_t b) {
-    const Node& x = nodes_[a];
-    const Node& y = nodes_[b];
+  auto worse = [](const OpenEntry& x, const OpenEntry& y) {
     if (x.f != y.f) return x.f > y.f;
     return x.t < y.t;  // deeper first
   };
   nodes_.push_back({0.f, static_cast<float>(row[at]), 0, at, -1});
-  open_.push_back(0);
+  open_.push_back({nodes_[0].f, 0, 0});
   int32_t best = 0;
   int expanded = 0;
   while (!open_.empty()) {
     std::pop_heap(open_.begin(), open_.end(), worse);
-    const int32_t id = open_.back();
+    const int32_t id = open_.back().id;
     open_.pop_back();
     const Node n = nodes_[id];
     uint32_t& mark = closed_[static_cast<size_t>(n.t) * cells + n.v];
@@ -187,7 +224,7 @@ void LocalGuidance::plan(const WorldView& world, int i) {
       seen_[key] = stamp_;
       best_g_[key] = g;
       nodes_.push_back({g, g + h, n.t + 1, u, id});
-      open_.push_back(static_cast<int32_t>(nodes_.size() - 1));
+      open_.push_back({g + h, n.t + 1, static_cast<int32_t>(nodes_.size() - 1)});
       std::push_heap(open_.begin(), open_.end(), worse);
     };
     // Neighbours in a random order, so equally good paths do not all bend the same way.

@@ -33,6 +33,7 @@ LocalGuidanceConfig guidance_config(Params& p) {
   c.lazy = p.get_int("lg-lazy", c.lazy ? 1 : 0, 0, 1) == 1;
   c.recheck = p.get_int("lg-recheck", c.recheck, 0, 1000);
   c.keep = p.get_int("lg-keep", c.keep, -1, 1000);
+  c.keep_optimal = p.get_int("lg-keep-optimal", c.keep_optimal ? 1 : 0, 0, 1) == 1;
   c.max_expansions = p.get_int("lg-expansions", c.max_expansions, 1, 1 << 30);
   return c;
 }

@@ -193,3 +193,34 @@ TEST(GdRhcrProduct, StepBudgetIsHonouredByCounting) {
   cfg.step_budget_s = -1;
   EXPECT_THROW(GdRhcrPlanner(g, 10, 1, cfg), ParamError);
 }
+
+TEST(LocalGuidance, KeepsAProvablyOptimalPathAndExtendsIt) {
+  // Alone on an open map, far from its goal: after one step along its path the agent's path
+  // cannot be improved, so with keep_optimal it is kept and extended, not searched again.
+  Grid g = Grid::load(repo("maps/empty-48-48.map"));
+  DistTable dist(g);
+  LocalGuidanceConfig cfg;
+  cfg.keep_optimal = true;
+  LocalGuidance lg(g, 1, cfg);
+  std::vector<Cell> pos = {g.cell(0, 0)};
+  std::vector<std::vector<Cell>> goals = {{g.cell(47, 47)}};
+  WorldView w0{g, dist, 0, pos, goals};
+  lg.update(w0, {0});
+  EXPECT_EQ(lg.searches(), 1);
+  pos[0] = lg.next_cell(0, 0, pos[0]);
+  WorldView w1{g, dist, 1, pos, goals};
+  lg.update(w1, {0});
+  EXPECT_EQ(lg.searches(), 1);
+  EXPECT_EQ(lg.kept(), 1);
+  const auto path = lg.path_from(0, 1);
+  ASSERT_EQ(static_cast<int>(path.size()), cfg.window + 1);
+  EXPECT_TRUE(is_walk(g, path));
+  for (size_t k = 0; k < path.size(); ++k)  // a step closer to the goal every step
+    EXPECT_EQ(dist.get(goals[0][0], path[k]), dist.get(goals[0][0], pos[0]) - static_cast<int>(k));
+  // Without keep_optimal it is searched again every step.
+  cfg.keep_optimal = false;
+  LocalGuidance again(g, 1, cfg);
+  again.update(w0, {0});
+  again.update(w1, {0});
+  EXPECT_EQ(again.searches(), 2);
+}
