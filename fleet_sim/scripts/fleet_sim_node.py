@@ -236,16 +236,27 @@ class FleetSim(object):
         occupied = {}
         for o in self.robots:
             occupied[o.cell] = occupied.get(o.cell, 0) + 1
-        for r in sorted(arriving, key=lambda a: a.t0 + a.duration):  # in the order they arrive
-            if occupied.get(r.dst, 0) > 0:
-                self.collisions += 1
-                rospy.logerr_throttle(1.0, "fleet_sim: robot %d arrived in %s, where another robot is" %
-                                      (r.id, r.dst))
-            occupied[r.cell] -= 1
-            occupied[r.dst] = occupied.get(r.dst, 0) + 1
-            r.cell = r.dst
-            r.src = r.dst
-            r.moving = False
+        # In the order they arrive; robots arriving at the same moment first all leave their
+        # cells (a robot that follows another at the same speed is not counted as a collision).
+        arriving.sort(key=lambda a: a.t0 + a.duration)
+        i = 0
+        while i < len(arriving):
+            j = i
+            while j < len(arriving) and arriving[j].t0 + arriving[j].duration <= arriving[i].t0 + arriving[i].duration + 1e-9:
+                j += 1
+            group = arriving[i:j]
+            for r in group:
+                occupied[r.cell] -= 1
+            for r in group:
+                if occupied.get(r.dst, 0) > 0:
+                    self.collisions += 1
+                    rospy.logerr_throttle(1.0, "fleet_sim: robot %d arrived in %s, where another robot is" %
+                                          (r.id, r.dst))
+                occupied[r.dst] = occupied.get(r.dst, 0) + 1
+                r.cell = r.dst
+                r.src = r.dst
+                r.moving = False
+            i = j
 
     def start_delays(self, now, period):
         self.delays_started += self.delays.tick(now, period, [r for r in self.robots if r.id not in self.absent])

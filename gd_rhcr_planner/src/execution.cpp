@@ -198,6 +198,7 @@ int Executor::dispatch_ready(TickOutput& out) {
     auto it = visits_.find(t.path.front());
     if (it != visits_.end() && !it->second.empty() && it->second.front() == r) {
       t.dispatched = true;
+      t.dispatched_at = ticks_;
       ++n;
     }
   }
@@ -273,7 +274,7 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, Dead
     if (tracks_[r].active) robot_of.push_back(r);
   const int na = static_cast<int>(robot_of.size());
   if (na == 0) return;
-  std::vector<Cell> positions(na), blocked, obstacles;
+  std::vector<Cell> positions(na), blocked, obstacles, late_cells;
   std::vector<std::vector<Cell>>& agent_goals = out.agent_goals;
   agent_goals.assign(na, {});
   std::vector<uint8_t> immovable(na, 0);
@@ -297,6 +298,10 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, Dead
       // this step; the others plan around its end state, so no commitments pile up behind a
       // late robot.
       immovable[a] = static_cast<int>(t.path.size()) >= cfg_.commit_horizon || holds(r);
+      // Late (commanded in an earlier tick, not arrived): it still fills the cell it leaves, so
+      // nobody is committed into that cell behind it now (they would only queue there).
+      // (Kept out of the distance table, which would be rebuilt on every change.)
+      if (t.dispatched && t.dispatched_at < ticks_) late_cells.push_back(t.cell);
       agent_goals[a] = holds(r) ? std::vector<Cell>{end} : planner_goals(r, goals[r], end);
     } else {
       // Lock-step: a robot still moving is held, and the cell it enters is reserved (issue 13).
@@ -311,6 +316,7 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, Dead
   std::sort(obstacles.begin(), obstacles.end());
   obstacles.erase(std::unique(obstacles.begin(), obstacles.end()), obstacles.end());
   const gdrhcr::DistTable& dist = dist_for(obstacles);
+  blocked.insert(blocked.end(), late_cells.begin(), late_cells.end());
 
   std::vector<uint8_t> movers_fixed(na, 0);  // the planner's immovable agents: bad robots, full queues
   gdrhcr::WorldView world{grid_, dist, static_cast<int>(steps_), positions, agent_goals};
@@ -369,6 +375,7 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
                           DeadlinePlanner& planner, bool proceed_without_missing, const std::vector<uint8_t>* hold) {
   TickOutput out;
   hold_ = hold;
+  ++ticks_;
   const int n = num_robots();
   if (static_cast<int>(robots.size()) != n || static_cast<int>(goals.size()) != n) {
     out.skip_reason = "executor: " + std::to_string(robots.size()) + " robot records and " +

@@ -112,6 +112,7 @@ class Executor {
     Cell cell = gdrhcr::kNoCell;
     std::deque<Cell> path;      // committed cells after `cell`
     bool dispatched = false;    // path.front() was commanded: reserved until arrival
+    uint64_t dispatched_at = 0; // the tick (counted by tick()) of that command
     Cell claimed = gdrhcr::kNoCell;  // inconsistent: the cell it reported (blocked)
     bool unknown_move = false;  // reported moving with no move commanded: its neighbours are blocked
     Cell last_target = gdrhcr::kNoCell;  // lockstep: target of its last move command, until it arrives
@@ -137,7 +138,7 @@ class Executor {
   gdrhcr::StepValidator validator_;
   std::vector<Cell> obstacle_cells_;  // the cells the current obstacle table blocks
   std::shared_ptr<const gdrhcr::DistTable> obstacle_dist_;
-  uint64_t steps_ = 0, resyncs_total_ = 0;
+  uint64_t steps_ = 0, resyncs_total_ = 0, ticks_ = 0;
   const std::vector<uint8_t>* hold_ = nullptr;  // during tick()
 };
 
