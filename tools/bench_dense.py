@@ -161,7 +161,7 @@ def plot(rows, path):
         ax1.hlines(LLLG[key][0], i - 0.45, i + 0.45, colors="red", linestyles="--", label="LLLG" if i == 0 else None)
         ax2.hlines(LLLG[key][1] / 10, i - 0.45, i + 0.45, colors="red", linestyles="--",
                    label="LLLG / 10" if i == 0 else None)
-    names = [f"{m}\n{a} agents" for m, a in keys]
+    names = [f"{m.replace('10-20-10-2-', '')}\n{a} agents" for m, a in keys]
     for ax in (ax1, ax2):
         ax.set_xticks(range(len(keys)))
         ax.set_xticklabels(names, fontsize=8)
