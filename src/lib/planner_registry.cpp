@@ -26,11 +26,15 @@ PibtOptions pibt_options(Params& p, bool paper) {
   return o;
 }
 
-LocalGuidanceConfig guidance_config(Params& p) {
+// Guidance replanned every step costs about one small search per agent per step; past
+// kLazyGuidanceAgents agents the default keeps paths lazily instead (fleets of 10,000).
+constexpr int kLazyGuidanceAgents = 2000;
+
+LocalGuidanceConfig guidance_config(Params& p, int num_agents) {
   LocalGuidanceConfig c;
   c.window = p.get_int("lg-window", c.window, 1, 1000);
   c.collision_cost = p.get_double("lg-cost", c.collision_cost, 0.0, 1e6);
-  c.lazy = p.get_int("lg-lazy", c.lazy ? 1 : 0, 0, 1) == 1;
+  c.lazy = p.get_int("lg-lazy", num_agents > kLazyGuidanceAgents ? 1 : 0, 0, 1) == 1;
   c.recheck = p.get_int("lg-recheck", c.recheck, 0, 1000);
   c.keep = p.get_int("lg-keep", c.keep, -1, 1000);
   c.keep_optimal = p.get_int("lg-keep-optimal", c.keep_optimal ? 1 : 0, 0, 1) == 1;
@@ -44,7 +48,7 @@ const std::vector<std::pair<std::string, PlannerFactory>>& registry() {
        [](Params& p, const Grid& grid, int n, uint64_t seed) -> std::unique_ptr<Planner> {
          const PibtOptions o = pibt_options(p, paper_preset(p));
          if (p.get_choice("guidance", "none", {"none", "local"}) == "local") {
-           LocalGuidanceConfig lg = guidance_config(p);
+           LocalGuidanceConfig lg = guidance_config(p, n);
            lg.seed = seed;
            return std::make_unique<PibtPlanner>(grid, n, seed, o, &lg);
          }
@@ -80,7 +84,7 @@ const std::vector<std::pair<std::string, PlannerFactory>>& registry() {
          c.density_margin = p.get_int("density-margin", c.density_margin, 0, 1 << 20);
          c.pibt = pibt_options(p, paper);  // the preset's PIBT unless overridden
          c.guidance = p.get_choice("guidance", c.guidance ? "local" : "none", {"none", "local"}) == "local";
-         c.lg = guidance_config(p);
+         c.lg = guidance_config(p, n);
          c.lg.seed = seed;
          return std::make_unique<GdRhcrPlanner>(grid, n, seed, c);
        }},
