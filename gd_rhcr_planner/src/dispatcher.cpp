@@ -91,7 +91,7 @@ BatchResult solve_batch(const std::vector<DispatchRobot>& robots, const std::vec
     int holder = t->holder;
     if (m != match.end() && robots[m->second].can_take_now()) {
       holder = robots[m->second].id;
-      out.stats.travel += (*dist.row(t->pickup))[robots[m->second].from];
+      if (holder != t->holder) out.stats.travel += (*dist.row(t->pickup))[robots[m->second].from];
     } else {
       if (m != match.end()) ++out.stats.reserved;
       // Its robot took another task in this batch: back to the queue.

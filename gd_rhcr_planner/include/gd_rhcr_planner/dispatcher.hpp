@@ -57,7 +57,7 @@ struct DispatchStats {
   int assigned = 0;      // queued tasks given to a robot this tick
   int reassigned = 0;    // unpicked tasks moved to another robot this tick
   int reserved = 0;      // tasks left waiting for a robot about to finish
-  int64_t travel = 0;    // total cells to the pickups of the matched pairs
+  int64_t travel = 0;    // cells to the pickups of this tick's new assignments (and moves)
   double time_s = 0;     // wall time of the batch
 };
 
