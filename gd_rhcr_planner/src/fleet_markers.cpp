@@ -121,7 +121,7 @@ visualization_msgs::MarkerArray FleetMarkers::update(const FleetView& v) {
       auto q = point(v.next[r], 0.3 * res);
       heading_[r] = std::atan2(q.y - p.y, q.x - p.x);
     }
-    const double h = heading_[r], a = 0.5 * res, b = 0.38 * res;
+    const double h = heading_[r], a = 0.62 * res, b = 0.5 * res;
     const bool off = r < v.offline.size() && v.offline[r];
     const auto colour = off ? rgba(0.35, 0.35, 0.35, 1) : group_colour(r < v.group_of.size() ? v.group_of[r] : int(r));
     const double ang[3] = {h, h + 2.45, h - 2.45};
