@@ -323,7 +323,8 @@ void PlannerNode::init() {
   mapd_pub_ = nh_.advertise<gd_rhcr_msgs::MapdCells>("mapd_cells", 1, true);
   stats_pub_ = nh_.advertise<gd_rhcr_msgs::PlannerStats>("planner_stats", 10);
   groups_pub_ = nh_.advertise<gd_rhcr_msgs::GroupArray>("planner_groups", 10);
-  // Markers are latched and sent as changes; a new subscriber first gets the whole picture.
+  // Markers are sent as changes; a new subscriber first gets the whole picture (not latched: a
+  // latched message would be the last change only).
   markers_pub_ = nh_.advertise<visualization_msgs::MarkerArray>(
       "fleet_markers", 1, [this](const ros::SingleSubscriberPublisher& sub) {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -331,7 +332,7 @@ void PlannerNode::init() {
         visualization_msgs::MarkerArray all;
         all.markers = markers_->current();
         sub.publish(all);
-      }, ros::SubscriberStatusCallback(), ros::VoidConstPtr(), true);
+      }, ros::SubscriberStatusCallback(), ros::VoidConstPtr(), false);
   MarkerStyle style;
   style.frame_id = frame_id_;
   style.label_limit = label_limit_;
@@ -586,8 +587,12 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
       last_problem_tick_ = tick_;
       ROS_WARN_THROTTLE(10.0, "%s", last_problem_.c_str());
     }
-    fleet_->advance();
-    dispatch_stats_ = dispatcher_->dispatch(*fleet_, *dist_, operator_->unavailable());
+    // Tasks move on only once the fleet does (every robot reported, or the wait for the missing
+    // ones is over): before, robots without a cell must not be assigned anything.
+    if (missing == 0 || proceed_without_missing) {
+      fleet_->advance();
+      dispatch_stats_ = dispatcher_->dispatch(*fleet_, *dist_, operator_->unavailable());
+    }
     publish_events_locked();
     fleet_->fill_positions(pos);
     fleet_->fill_goals(goals);
@@ -832,6 +837,13 @@ void PlannerNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
   s.add("operator", operator_->summary());
   s.add("tick", tick_);
   s.add("tick rate target (Hz)", tick_rate_);
+  {
+    const double now_s = ros::WallTime::now().toSec();
+    double rate = 0;
+    if (tick_stamps_.size() >= 2 && now_s - tick_stamps_.front() < 6.0)
+      rate = (tick_stamps_.size() - 1) / (tick_stamps_.back() - tick_stamps_.front());
+    s.add("tick rate measured (Hz)", rate);
+  }
   s.add("plan time mean (s)", plan_time_count_ ? plan_time_sum_ / plan_time_count_ : 0.0);
   s.add("plan time max (s)", plan_time_max_);
   s.add("tick callback max (s)", step_time_max_);

@@ -154,7 +154,7 @@ class WarehouseTest(unittest.TestCase):
         markers = rospy.wait_for_message("fleet_markers", MarkerArray, timeout=5)
         robots = [m for m in markers.markers if m.ns == "robots"]
         self.assertEqual(len(robots), 1)
-        self.assertEqual(len(robots[0].points), self.num_robots)
+        self.assertEqual(len(robots[0].points), 3 * self.num_robots)  # a triangle per robot
         self.assertEqual(robots[0].header.frame_id, "map")
 
     def test_2_step_commands_at_tick_rate(self):
