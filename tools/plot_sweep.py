@@ -72,7 +72,9 @@ def panel(ax, data, ylabel, log=False, legend=True):
         hi = [p[1] + p[2] for p in pts]
         color = COLORS.get(label, "C%d" % (i + 3))
         ax.plot(xs, mean, marker="o", ms=3, color=color, label=label)
-        ax.fill_between(xs, [max(v, 1e-9) if log else v for v in lo], hi, color=color, alpha=0.2)
+        # On a log axis mean - SD can be <= 0: the band's lower edge is clipped at a tenth of the mean.
+        lo = [max(v, 0.1 * m) for v, m in zip(lo, mean)] if log else lo
+        ax.fill_between(xs, lo, hi, color=color, alpha=0.2)
     ax.set_xlabel("agents")
     ax.set_ylabel(ylabel)
     if log:
