@@ -97,7 +97,7 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
 
 // Candidates: the neighbours and staying put, the preferred cell first, then nearest to the
 // goal; among equals (tie_break kFreeFirst) a cell nobody stands on, then a random order.
-void PibtStep::order_candidates(const WorldView& world, int ai, Cell* cand, int m) {
+void PibtStep::order_candidates(int ai, Cell* cand, int m) {
   const DistRow& row = *rows_[ai];
   const Cell pref = preferred_ ? (*preferred_)[ai] : kNoCell;
   std::shuffle(cand, cand + m, rng_);
@@ -108,7 +108,6 @@ void PibtStep::order_candidates(const WorldView& world, int ai, Cell* cand, int 
     if (!free_first) return false;
     return (occupied_now_[a] == kFree) > (occupied_now_[b] == kFree);
   });
-  (void)world;
 }
 
 bool PibtStep::push(const WorldView& world, int ai, int aj, std::vector<Cell>& next) {
@@ -117,7 +116,7 @@ bool PibtStep::push(const WorldView& world, int ai, int aj, std::vector<Cell>& n
   int m = 0;
   for (Cell c : grid_.neighbours(here)) cand[m++] = c;
   cand[m++] = here;
-  order_candidates(world, ai, cand, m);
+  order_candidates(ai, cand, m);
   // Swap: the agent on the best cell must get past this one; walk away and pull it along.
   int partner = -1;
   if (opt_.swap) {

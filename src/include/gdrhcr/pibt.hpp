@@ -64,7 +64,7 @@ class PibtStep {
 
  private:
   bool push(const WorldView& world, int ai, int aj, std::vector<Cell>& next);
-  void order_candidates(const WorldView& world, int ai, Cell* cand, int m);
+  void order_candidates(int ai, Cell* cand, int m);
   int swap_partner(const WorldView& world, int ai, Cell best) const;
   bool needs_swap(Cell pusher_at, Cell puller_at, const DistRow& pusher_row,
                   const DistRow& puller_row) const;
