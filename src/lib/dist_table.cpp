@@ -1,4 +1,5 @@
 #include "gdrhcr/dist_table.hpp"
+#include "tsan_annotations.hpp"
 
 #include <algorithm>
 #include <stdexcept>
@@ -8,17 +9,6 @@
 
 namespace gdrhcr {
 
-// libtbb is not built with ThreadSanitizer (see gd_rhcr.cpp): under TSan we state the
-// happens-before edges of the parallel BFS batch ourselves.
-#if defined(__SANITIZE_THREAD__)
-extern "C" void __tsan_acquire(void* addr);
-extern "C" void __tsan_release(void* addr);
-#define GDRHCR_TSAN_ACQUIRE(p) __tsan_acquire(p)
-#define GDRHCR_TSAN_RELEASE(p) __tsan_release(p)
-#else
-#define GDRHCR_TSAN_ACQUIRE(p) ((void)(p))
-#define GDRHCR_TSAN_RELEASE(p) ((void)(p))
-#endif
 
 namespace {
 // What a cache entry costs besides its row: the Entry, and the hash node (key, pointer, next).
