@@ -2,6 +2,8 @@
 // product configuration. Every simulation validates every executed step (a collision throws).
 #include <gtest/gtest.h>
 
+#include "list_stream.hpp"
+
 #include "gdrhcr/gd_rhcr.hpp"
 #include "gdrhcr/local_guidance.hpp"
 #include "gdrhcr/pibt.hpp"
@@ -13,17 +15,7 @@ using namespace gdrhcr;
 namespace {
 std::string repo(const std::string& rel) { return std::string(GDRHCR_SOURCE_DIR) + "/" + rel; }
 
-class ListStream : public TaskStream {
- public:
-  explicit ListStream(std::vector<std::vector<Cell>> goals) : goals_(std::move(goals)), next_(goals_.size(), 0) {}
-  std::string name() const override { return "list"; }
-  Cell next_goal(int agent, Cell) override { return goals_[agent][next_[agent]++ % goals_[agent].size()]; }
-  std::unique_ptr<TaskStream> clone_fresh() const override { return std::make_unique<ListStream>(goals_); }
-
- private:
-  std::vector<std::vector<Cell>> goals_;
-  std::vector<size_t> next_;
-};
+using gdrhcr::test_support::ListStream;
 
 SimResult run(const Grid& g, TaskStream& tasks, Planner& p, const std::vector<Cell>& starts, int steps) {
   DistTable dist(g);

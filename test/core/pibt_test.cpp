@@ -2,6 +2,8 @@
 // goals get reached, and it copes with a narrow corridor and a crowded map.
 #include <gtest/gtest.h>
 
+#include "list_stream.hpp"
+
 #include "gdrhcr/pibt.hpp"
 #include "gdrhcr/simulator.hpp"
 #include "gdrhcr/validator.hpp"
@@ -11,21 +13,7 @@ using namespace gdrhcr;
 namespace {
 std::string repo(const std::string& rel) { return std::string(GDRHCR_SOURCE_DIR) + "/" + rel; }
 
-// A task stream with fixed per-agent goal lists (cycled).
-class ListStream : public TaskStream {
- public:
-  explicit ListStream(std::vector<std::vector<Cell>> goals) : goals_(std::move(goals)), next_(goals_.size(), 0) {}
-  std::string name() const override { return "list"; }
-  Cell next_goal(int agent, Cell) override {
-    auto& g = goals_[agent];
-    return g[next_[agent]++ % g.size()];
-  }
-  std::unique_ptr<TaskStream> clone_fresh() const override { return std::make_unique<ListStream>(goals_); }
-
- private:
-  std::vector<std::vector<Cell>> goals_;
-  std::vector<size_t> next_;
-};
+using gdrhcr::test_support::ListStream;
 
 SimResult run_pibt(const Grid& g, TaskStream& tasks, const std::vector<Cell>& starts, int steps,
                    uint64_t seed = 1, PibtOptions options = {}) {
