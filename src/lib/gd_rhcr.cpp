@@ -1,6 +1,7 @@
 #include "gdrhcr/gd_rhcr.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 
 #include <tbb/blocked_range.h>
@@ -59,6 +60,18 @@ namespace {
 // 0 or 1 and would send every group, even a lone agent, to the secondary solver; the floor of 2
 // keeps single agents on the primary solver.
 int default_k_threshold(int num_agents) { return std::max(2, std::min(num_agents / 10, 20)); }
+
+// The smallest box (x0, y0, x1, y1) holding the agents' cells.
+std::array<int, 4> bounding_box(const Grid& grid, const WorldView& world, const std::vector<int>& agents) {
+  int x0 = grid.width(), x1 = -1, y0 = grid.height(), y1 = -1;
+  for (int i : agents) {
+    x0 = std::min(x0, grid.x_of(world.positions[i]));
+    x1 = std::max(x1, grid.x_of(world.positions[i]));
+    y0 = std::min(y0, grid.y_of(world.positions[i]));
+    y1 = std::max(y1, grid.y_of(world.positions[i]));
+  }
+  return {x0, y0, x1, y1};
+}
 }  // namespace
 
 GdRhcrConfig GdRhcrConfig::paper() {
@@ -182,16 +195,10 @@ void GdRhcrPlanner::count_density(const WorldView& world) {
 
 // Agents per free cell around the group: its bounding box grown by density_margin.
 double GdRhcrPlanner::local_density(const WorldView& world, const std::vector<int>& group) const {
-  int x0 = grid_.width(), x1 = -1, y0 = grid_.height(), y1 = -1;
-  for (int i : group) {
-    x0 = std::min(x0, grid_.x_of(world.positions[i]));
-    x1 = std::max(x1, grid_.x_of(world.positions[i]));
-    y0 = std::min(y0, grid_.y_of(world.positions[i]));
-    y1 = std::max(y1, grid_.y_of(world.positions[i]));
-  }
+  const auto b = bounding_box(grid_, world, group);
   const int m = cfg_.density_margin, w = grid_.width();
-  x0 = std::max(0, x0 - m), y0 = std::max(0, y0 - m);
-  x1 = std::min(grid_.width() - 1, x1 + m), y1 = std::min(grid_.height() - 1, y1 + m);
+  const int x0 = std::max(0, b[0] - m), y0 = std::max(0, b[1] - m);
+  const int x1 = std::min(grid_.width() - 1, b[2] + m), y1 = std::min(grid_.height() - 1, b[3] + m);
   auto box = [&](const std::vector<int>& sum) {
     auto at = [&](int x, int y) { return sum[static_cast<size_t>(y) * (w + 1) + x]; };
     return at(x1 + 1, y1 + 1) - at(x0, y1 + 1) - at(x1 + 1, y0) + at(x0, y0);
@@ -220,13 +227,7 @@ void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
   SoftConstraintTable& soft = *table;
   soft.clear();
   if (cfg_.c_soft > 0) {
-    int x0 = grid_.width(), x1 = -1, y0 = grid_.height(), y1 = -1;
-    for (int i : agents) {
-      x0 = std::min(x0, grid_.x_of(world.positions[i]));
-      x1 = std::max(x1, grid_.x_of(world.positions[i]));
-      y0 = std::min(y0, grid_.y_of(world.positions[i]));
-      y1 = std::max(y1, grid_.y_of(world.positions[i]));
-    }
+    const auto [x0, y0, x1, y1] = bounding_box(grid_, world, agents);
     const int margin = 2 * cfg_.H;
     const int my_group = partition_.group_of(agents[0]);
     std::vector<Cell> rest;
