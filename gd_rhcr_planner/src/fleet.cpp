@@ -280,9 +280,10 @@ std::vector<std::string> Fleet::apply_assignments(const std::vector<Reassignment
   return refused;
 }
 
-uint8_t Fleet::mode(int r) const {
+uint8_t Fleet::mode(int r) const { return robots_[r].offline ? kOffline : command_mode(r); }
+
+uint8_t Fleet::command_mode(int r) const {
   const RobotRecord& rob = robots_[r];
-  if (rob.offline) return kOffline;
   if (rob.task < 0) return kIdle;
   auto it = tasks_.find(static_cast<uint64_t>(rob.task));
   if (it == tasks_.end()) return kIdle;

@@ -689,7 +689,7 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     c.next_x = grid.x_of(next[r]);
     c.next_y = grid.y_of(next[r]);
     c.target_pose = pose_of(next[r]);
-    c.mode = operator_->mode(r, fleet_->mode(r));
+    c.mode = operator_->mode(r, fleet_->command_mode(r));
     c.task_id = fleet_->task_of(r);
   }
   commands_pub_.publish(cmds);

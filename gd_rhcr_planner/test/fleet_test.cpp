@@ -145,8 +145,10 @@ TEST(Fleet, SilentRobotGoesOfflineAfterTheTimeoutAndItsLoadIsRequeued) {
   EXPECT_EQ(f.mark_silent(12.5, 2.0), std::vector<int>{0});
   EXPECT_TRUE(f.mark_silent(13.0, 2.0).empty());  // reported once
   EXPECT_EQ(f.mode(0), kOffline);
+  EXPECT_EQ(f.command_mode(0), kToDelivery);  // never commanded "offline" (it would echo it)
   EXPECT_EQ(f.offline_count(), 1);
   f.advance();
+  EXPECT_EQ(f.command_mode(0), kIdle);  // its load requeued
   // Requeued and given to the other robot, which fetches the load from the pickup again.
   EXPECT_EQ(f.task(t)->state, kAssigned);
   EXPECT_EQ(f.task(t)->robot, 1);

@@ -209,9 +209,17 @@ void LocalGuidance::plan(const WorldView& world, int i) {
     uint32_t& mark = closed_[static_cast<size_t>(n.t) * cells + n.v];
     if (mark == stamp_) continue;
     mark = stamp_;
+    // Done on the goal (the agent gets its next goal there): that path, even when a deeper node
+    // was popped before it. Such a node is no cheaper and does not reach the goal; following
+    // it (waiting beside a goal another agent rests on, where stepping in costs a collision at
+    // every time) kept an agent off that goal for ever. PIBT pushes the resting agent away.
+    if (n.v == goal) {
+      best = id;
+      break;
+    }
     if (n.t > nodes_[best].t || (n.t == nodes_[best].t && n.f < nodes_[best].f)) best = id;
-    // Done at the window's end, or on the goal (the agent gets its next goal there).
-    if (n.t == W || n.v == goal || ++expanded > cfg_.max_expansions) break;
+    // Done at the window's end (or out of expansions: the deepest cheapest node so far).
+    if (n.t == W || ++expanded > cfg_.max_expansions) break;
     auto expand = [&](Cell u) {
       const size_t key = static_cast<size_t>(n.t + 1) * cells + u;
       if (closed_[key] == stamp_) return;

@@ -9,6 +9,7 @@
 #include "gdrhcr/pibt.hpp"
 #include "gdrhcr/simulator.hpp"
 #include "gdrhcr/task_stream.hpp"
+#include "gdrhcr/validator.hpp"
 
 using namespace gdrhcr;
 
@@ -95,6 +96,50 @@ TEST(LocalGuidance, RejectsNonsenseConfig) {
   c.window = 5;
   c.collision_cost = -1;
   EXPECT_THROW(LocalGuidance(g, 1, c), ParamError);
+}
+
+TEST(LocalGuidance, PathEndsOnAGoalAnotherAgentRestsOn) {
+  // Agent 1 rests on agent 0's goal, next to agent 0. Every step onto the goal costs a
+  // collision, so waiting beside it is as cheap for a few steps; the guidance must still lead
+  // onto the goal (PIBT then pushes the resting agent away), not wait there for ever.
+  Grid g = Grid::from_rows({"......", "......"});
+  DistTable dist(g);
+  LocalGuidance lg(g, 2, {});
+  std::vector<Cell> pos = {g.cell(2, 0), g.cell(1, 0)};
+  std::vector<std::vector<Cell>> goals = {{g.cell(1, 0)}, {g.cell(1, 0)}};
+  WorldView w{g, dist, 0, pos, goals};
+  lg.update(w, {1, 0});
+  const auto path = lg.path_from(0, 0);
+  ASSERT_FALSE(path.empty());
+  EXPECT_EQ(path.back(), g.cell(1, 0));
+  EXPECT_EQ(lg.next_cell(0, 0, pos[0]), g.cell(1, 0));
+}
+
+// The planner-restart rostest's deadlock, in the core: a robot delivering to a cell where an
+// idle robot is parked (its goal is its own cell) must get there; guided PIBT and GD-RHCR's
+// product configuration used to leave it waiting beside the cell for ever.
+TEST(GuidedPibt, ReachesAGoalAnIdleAgentIsParkedOn) {
+  Grid g = Grid::from_rows({"..........", "..........", ".........."});
+  DistTable dist(g);
+  const Cell goal = g.cell(1, 1);
+  LocalGuidanceConfig lg;
+  PibtPlanner pibt(g, 2, 1, PibtOptions{}, &lg);
+  GdRhcrPlanner gd(g, 2, 1, GdRhcrConfig::product());
+  StepValidator check(g);
+  for (Planner* p : std::vector<Planner*>{&pibt, &gd}) {
+    std::vector<Cell> pos = {g.cell(9, 1), goal};
+    std::vector<std::vector<Cell>> goals = {{goal}, {goal}};
+    int t = 0;
+    for (; t < 40 && pos[0] != goal; ++t) {
+      goals[1] = {pos[1]};  // idle: stays where it is unless pushed
+      WorldView w{g, dist, t, pos, goals};
+      std::vector<Cell> next(pos.size(), kNoCell);
+      p->plan_step(w, next);
+      ASSERT_FALSE(check.check(pos, next).has_value()) << p->name();
+      pos = next;
+    }
+    EXPECT_EQ(pos[0], goal) << p->name() << " did not reach the goal in " << t << " steps";
+  }
 }
 
 TEST(GuidedPibt, CorridorHeadOnAllArrive) {

@@ -104,7 +104,13 @@ class Fleet {
   // [delivery], idle and offline robots [their cell].
   void fill_goals(std::vector<std::vector<Cell>>& goals) const;
   void fill_positions(std::vector<Cell>& positions) const;
+  // The robot's state as the fleet sees it: kOffline for an offline or silent robot, else its
+  // task's phase (kIdle, kToPickup, kToDelivery).
   uint8_t mode(int robot) const;
+  // The mode a step command gives the robot: its task's phase, never kOffline. Offline is what a
+  // robot reports, not an order: a robot that adopts the commanded mode (fleet_sim does) and was
+  // told "offline" while it was silent would report offline forever and never come back.
+  uint8_t command_mode(int robot) const;
   int64_t task_of(int robot) const { return robots_[robot].task; }
   const RobotRecord& robot(int r) const { return robots_[r]; }
 
