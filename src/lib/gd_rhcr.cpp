@@ -337,7 +337,7 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
     std::vector<int> order(agents);
     std::stable_sort(order.begin(), order.end(),
                      [&](int a, int b) { return pibt_.priority(a) > pibt_.priority(b); });
-    guidance_->update(world, order, step_deadline_);
+    arena_->arena.execute([&] { guidance_->update(world, order, step_deadline_); });  // banded: threads
     std::vector<Cell> preferred(world.num_agents(), kNoCell);
     for (int i : agents) preferred[i] = guidance_->next_cell(i, world.timestep, world.positions[i]);
     pibt_.step(world, moves, agents, fixed, &preferred);
@@ -550,6 +550,8 @@ nlohmann::json GdRhcrPlanner::params() const {
           {"density_margin", cfg_.density_margin},
           {"lg_window", cfg_.lg.window},
           {"lg_cost", cfg_.lg.collision_cost},
+          {"lg_lazy", cfg_.lg.lazy},
+          {"lg_phases", cfg_.lg.phases},
           {"seed", seed_}};
 }
 
@@ -570,6 +572,9 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"density_fallbacks", density_fallbacks_},
           {"budget_skips", budget_skips_},
           {"guidance_cut_short", guidance_ ? guidance_->cut_short() : 0},
+          {"guidance_searches", guidance_ ? guidance_->searches() : 0},
+          {"guidance_kept", guidance_ ? guidance_->kept() : 0},
+          {"guidance_expansions", guidance_ ? guidance_->expansions() : 0},
           {"failure_fallbacks", failure_fallbacks_},
           {"timeouts", timeouts_},
           {"repairs", repairs_},

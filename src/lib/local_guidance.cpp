@@ -3,8 +3,26 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
+
+#include "gdrhcr/task_stream.hpp"
+#include "tsan_annotations.hpp"
+
 namespace gdrhcr {
 
+struct LocalGuidance::Parallel {
+  tbb::enumerable_thread_specific<Search> search;
+};
+
+void LocalGuidance::Counts::add(const Counts& o) {
+  searches += o.searches;
+  expansions += o.expansions;
+  cut_short += o.cut_short;
+  kept += o.kept;
+}
 
 LocalGuidance::LocalGuidance(const Grid& grid, int num_agents, LocalGuidanceConfig config)
     : grid_(grid),
@@ -15,12 +33,18 @@ LocalGuidance::LocalGuidance(const Grid& grid, int num_agents, LocalGuidanceConf
       goal_(num_agents, kNoCell),
       at_(static_cast<size_t>(slots_) * grid.num_cells(), 0),
       leaving_(static_cast<size_t>(slots_) * grid.num_cells() * 4, 0),
-      closed_(static_cast<size_t>(slots_) * grid.num_cells(), 0),
-      seen_(static_cast<size_t>(slots_) * grid.num_cells(), 0),
-      best_g_(static_cast<size_t>(slots_) * grid.num_cells(), 0.f),
       rng_(config.seed) {
   if (cfg_.window < 1) throw ParamError("local guidance: window must be >= 1");
   if (!(cfg_.collision_cost >= 0)) throw ParamError("local guidance: collision cost must be >= 0");
+  if (cfg_.phases < 0 || cfg_.phases == 1) throw ParamError("local guidance: phases must be 0 or >= 2");
+  if (cfg_.phases >= 2) parallel_ = std::make_unique<Parallel>();
+}
+
+LocalGuidance::~LocalGuidance() = default;
+
+int LocalGuidance::band_width() const {
+  if (cfg_.phases < 2) return 0;
+  return std::max(1, (2 * cfg_.window + cfg_.phases - 2) / (cfg_.phases - 1));
 }
 
 int LocalGuidance::dir(Cell from, Cell to) const {
@@ -109,7 +133,7 @@ bool LocalGuidance::is_valid(const WorldView& world, int i) const {
 // kept path meets nobody and approaches the goal by one every step: no path can do better. Such
 // a path is kept and, if it stops short of the goal, extended by conflict-free steps towards the
 // goal up to the window; otherwise (or if no such step exists) the agent is replanned.
-bool LocalGuidance::still_optimal(const WorldView& world, int i) {
+bool LocalGuidance::still_optimal(const WorldView& world, int i, std::minstd_rand& rng) {
   auto& p = path_[i];
   if (p.size() < 2 || start_[i] != world.timestep || p[0] != world.positions[i]) return false;
   const Cell goal = world.goals[i].empty() ? world.positions[i] : world.goals[i][0];
@@ -133,7 +157,7 @@ bool LocalGuidance::still_optimal(const WorldView& world, int i) {
           leaving_[(slot(t_last) * cells + u) * 4 + dir(u, last)] == 0)
         options[m++] = u;
     if (m == 0) return false;
-    const Cell u = options[m == 1 ? 0 : rng_() % m];
+    const Cell u = options[m == 1 ? 0 : rng() % m];
     p.push_back(u);
     at_[slot(t_last + 1) * cells + u] += 1;
     leaving_[(slot(t_last) * cells + last) * 4 + dir(last, u)] += 1;
@@ -144,18 +168,29 @@ bool LocalGuidance::still_optimal(const WorldView& world, int i) {
 void LocalGuidance::update(const WorldView& world, const std::vector<int>& agents,
                            std::chrono::steady_clock::time_point deadline) {
   const int now = world.timestep;
-  const bool timed = deadline != std::chrono::steady_clock::time_point::max();
   for (size_t i = 0; i < path_.size(); ++i) drop_past(static_cast<int>(i), now);
+  if (parallel_) {
+    update_banded(world, agents, deadline);
+  } else {
+    update_in_order(world, agents, deadline, search_, rng_, counts_);
+  }
+}
+
+// The sequential update of `agents`, in order (also one band of the parallel update).
+void LocalGuidance::update_in_order(const WorldView& world, const std::vector<int>& agents,
+                                    std::chrono::steady_clock::time_point deadline, Search& search,
+                                    std::minstd_rand& rng, Counts& counts) {
+  const bool timed = deadline != std::chrono::steady_clock::time_point::max();
   for (size_t k = 0; k < agents.size(); ++k) {
     const int i = agents[k];
-    if (cfg_.lazy ? is_valid(world, i) : (cfg_.keep_optimal && still_optimal(world, i))) {
-      ++kept_;
+    if (cfg_.lazy ? is_valid(world, i) : (cfg_.keep_optimal && still_optimal(world, i, rng))) {
+      ++counts.kept;
       continue;
     }
     enroll(i, -1);
     path_[i].clear();
     if (timed && (k % 16) == 0 && std::chrono::steady_clock::now() >= deadline) {
-      ++cut_short_;  // out of time: no guidance for the rest; PIBT uses distances for them
+      ++counts.cut_short;  // out of time: no guidance for the rest; PIBT uses distances for them
       for (size_t r = k + 1; r < agents.size(); ++r) {
         if (is_valid(world, agents[r])) continue;
         enroll(agents[r], -1);
@@ -163,16 +198,57 @@ void LocalGuidance::update(const WorldView& world, const std::vector<int>& agent
       }
       return;
     }
-    plan(world, i);
+    plan(world, i, search, rng, counts);
     enroll(i, +1);
   }
+}
+
+// The parallel update (see the header): stale paths are dropped first, so every path left
+// starts at its agent's cell; then the bands of each phase run concurrently.
+void LocalGuidance::update_banded(const WorldView& world, const std::vector<int>& agents,
+                                  std::chrono::steady_clock::time_point deadline) {
+  const int now = world.timestep;
+  for (size_t i = 0; i < path_.size(); ++i)
+    if (!path_[i].empty() && (start_[i] != now || path_[i][0] != world.positions[i])) clear(static_cast<int>(i));
+  const bool across_x = grid_.width() >= grid_.height();
+  const int side = across_x ? grid_.width() : grid_.height();
+  const int width = band_width();
+  const int bands = (side + width - 1) / width;
+  band_agents_.resize(bands);
+  for (auto& b : band_agents_) b.clear();
+  for (int i : agents) {
+    const Cell c = world.positions[i];
+    band_agents_[(across_x ? grid_.x_of(c) : grid_.y_of(c)) / width].push_back(i);
+  }
+  std::vector<Counts> counts(bands);
+  for (int phase = 0; phase < cfg_.phases; ++phase) {
+    std::vector<int> mine;
+    for (int b = phase; b < bands; b += cfg_.phases)
+      if (!band_agents_[b].empty()) mine.push_back(b);
+    GDRHCR_TSAN_RELEASE(this);
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, mine.size(), 1),
+        [&](const tbb::blocked_range<size_t>& r) {
+          GDRHCR_TSAN_ACQUIRE(this);
+          for (size_t k = r.begin(); k != r.end(); ++k) {
+            const int b = mine[k];
+            const uint64_t draw = mix_seed(mix_seed(cfg_.seed, static_cast<uint64_t>(now)), static_cast<uint64_t>(b));
+            std::minstd_rand rng(static_cast<std::minstd_rand::result_type>(draw % 2147483646u + 1));
+            update_in_order(world, band_agents_[b], deadline, parallel_->search.local(), rng, counts[b]);
+          }
+          GDRHCR_TSAN_RELEASE(this);
+        },
+        tbb::simple_partitioner());
+    GDRHCR_TSAN_ACQUIRE(this);
+  }
+  for (auto& c : counts) counts_.add(c);
 }
 
 // Space-time A* over (t, cell), t = 0..W: cost 1 per step plus collision_cost (and a tiny
 // per-conflict count) when a step meets another path; heuristic the distance to the goal.
 // Among equal f the deeper node goes first, so free paths are found almost without branching.
-void LocalGuidance::plan(const WorldView& world, int i) {
-  ++searches_;
+void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::minstd_rand& rng, Counts& counts) {
+  ++counts.searches;
   const Cell at = world.positions[i];
   const Cell goal = world.goals[i].empty() ? at : world.goals[i][0];
   goal_[i] = goal;
@@ -186,29 +262,37 @@ void LocalGuidance::plan(const WorldView& world, int i) {
   const auto row_ptr = world.dist.row(goal);
   const DistRow& row = *row_ptr;
   const size_t cells = grid_.num_cells();
-  if (++stamp_ == 0) {
-    std::fill(closed_.begin(), closed_.end(), 0);
-    std::fill(seen_.begin(), seen_.end(), 0);
-    stamp_ = 1;
+  const size_t table = static_cast<size_t>(slots_) * cells;
+  if (search.marks.size() != table) {
+    search.marks.assign(table, Mark{0, 0, 0.f});
+    search.stamp = 0;
   }
-  nodes_.clear();
-  open_.clear();
+  if (++search.stamp == 0) {
+    std::fill(search.marks.begin(), search.marks.end(), Mark{0, 0, 0.f});
+    search.stamp = 1;
+  }
+  auto& marks = search.marks;
+  auto& nodes = search.nodes;
+  auto& open = search.open;
+  const uint32_t stamp = search.stamp;
+  nodes.clear();
+  open.clear();
   auto worse = [](const OpenEntry& x, const OpenEntry& y) {
     if (x.f != y.f) return x.f > y.f;
     return x.t < y.t;  // deeper first
   };
-  nodes_.push_back({0.f, static_cast<float>(row[at]), 0, at, -1});
-  open_.push_back({nodes_[0].f, 0, 0});
+  nodes.push_back({0.f, static_cast<float>(row[at]), 0, at, -1});
+  open.push_back({nodes[0].f, 0, 0});
   int32_t best = 0;
   int expanded = 0;
-  while (!open_.empty()) {
-    std::pop_heap(open_.begin(), open_.end(), worse);
-    const int32_t id = open_.back().id;
-    open_.pop_back();
-    const Node n = nodes_[id];
-    uint32_t& mark = closed_[static_cast<size_t>(n.t) * cells + n.v];
-    if (mark == stamp_) continue;
-    mark = stamp_;
+  while (!open.empty()) {
+    std::pop_heap(open.begin(), open.end(), worse);
+    const int32_t id = open.back().id;
+    open.pop_back();
+    const Node n = nodes[id];
+    uint32_t& mark = marks[static_cast<size_t>(n.t) * cells + n.v].closed;
+    if (mark == stamp) continue;
+    mark = stamp;
     // Done on the goal (the agent gets its next goal there): that path, even when a deeper node
     // was popped before it. Such a node is no cheaper and does not reach the goal; following
     // it (waiting beside a goal another agent rests on, where stepping in costs a collision at
@@ -217,35 +301,35 @@ void LocalGuidance::plan(const WorldView& world, int i) {
       best = id;
       break;
     }
-    if (n.t > nodes_[best].t || (n.t == nodes_[best].t && n.f < nodes_[best].f)) best = id;
+    if (n.t > nodes[best].t || (n.t == nodes[best].t && n.f < nodes[best].f)) best = id;
     // Done at the window's end (or out of expansions: the deepest cheapest node so far).
     if (n.t == W || ++expanded > cfg_.max_expansions) break;
     auto expand = [&](Cell u) {
-      const size_t key = static_cast<size_t>(n.t + 1) * cells + u;
-      if (closed_[key] == stamp_) return;
+      Mark& mk = marks[static_cast<size_t>(n.t + 1) * cells + u];
+      if (mk.closed == stamp) return;
       const int h = row[u];
       if (h >= kUnreachable) return;
       const int c = collisions(n.v, u, world.timestep + n.t);
       float g = n.g + 1.f;
       if (c > 0) g += static_cast<float>(cfg_.collision_cost) + 1e-3f * c;
-      if (seen_[key] == stamp_ && best_g_[key] <= g) return;  // reached as cheaply before
-      seen_[key] = stamp_;
-      best_g_[key] = g;
-      nodes_.push_back({g, g + h, n.t + 1, u, id});
-      open_.push_back({g + h, n.t + 1, static_cast<int32_t>(nodes_.size() - 1)});
-      std::push_heap(open_.begin(), open_.end(), worse);
+      if (mk.seen == stamp && mk.best_g <= g) return;  // reached as cheaply before
+      mk.seen = stamp;
+      mk.best_g = g;
+      nodes.push_back({g, g + h, n.t + 1, u, id});
+      open.push_back({g + h, n.t + 1, static_cast<int32_t>(nodes.size() - 1)});
+      std::push_heap(open.begin(), open.end(), worse);
     };
     // Neighbours in a random order, so equally good paths do not all bend the same way.
     Cell nb[4];
     int m = 0;
     for (Cell u : grid_.neighbours(n.v)) nb[m++] = u;
-    for (int a = m - 1; a > 0; --a) std::swap(nb[a], nb[rng_() % (a + 1)]);
+    for (int a = m - 1; a > 0; --a) std::swap(nb[a], nb[rng() % (a + 1)]);
     for (int a = 0; a < m; ++a) expand(nb[a]);
     expand(n.v);
   }
-  expansions_ += expanded;
-  out.assign(nodes_[best].t + 1, kNoCell);
-  for (int32_t k = best; k >= 0; k = nodes_[k].parent) out[nodes_[k].t] = nodes_[k].v;
+  counts.expansions += expanded;
+  out.assign(nodes[best].t + 1, kNoCell);
+  for (int32_t k = best; k >= 0; k = nodes[k].parent) out[nodes[k].t] = nodes[k].v;
 }
 
 Cell LocalGuidance::next_cell(int i, int now, Cell at) const {

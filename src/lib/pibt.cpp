@@ -102,12 +102,15 @@ void PibtStep::order_candidates(int ai, Cell* cand, int m) {
   const Cell pref = preferred_ ? (*preferred_)[ai] : kNoCell;
   std::shuffle(cand, cand + m, rng_);
   const bool free_first = opt_.tie_break == PibtOptions::TieBreak::kFreeFirst;
-  std::stable_sort(cand, cand + m, [&](Cell a, Cell b) {
-    if ((a == pref) != (b == pref)) return a == pref;
-    if (row[a] != row[b]) return row[a] < row[b];
-    if (!free_first) return false;
-    return (occupied_now_[a] == kFree) > (occupied_now_[b] == kFree);
-  });
+  // A stable insertion sort on keys read once (std::stable_sort allocates a buffer per call).
+  int key[5];
+  for (int k = 0; k < m; ++k) {
+    const Cell c = cand[k];
+    key[k] = (c == pref ? 0 : 1 << 30) + std::min(row[c], (1 << 28) - 1) * 2 +
+             (free_first && occupied_now_[c] != kFree ? 1 : 0);
+  }
+  for (int k = 1; k < m; ++k)
+    for (int j = k; j > 0 && key[j] < key[j - 1]; --j) std::swap(key[j], key[j - 1]), std::swap(cand[j], cand[j - 1]);
 }
 
 bool PibtStep::push(const WorldView& world, int ai, int aj, std::vector<Cell>& next) {
@@ -234,6 +237,7 @@ nlohmann::json PibtPlanner::params() const {
     p["lg_window"] = guidance_->config().window;
     p["lg_cost"] = guidance_->config().collision_cost;
     p["lg_lazy"] = guidance_->config().lazy;
+    p["lg_phases"] = guidance_->config().phases;
   }
   return p;
 }

@@ -27,7 +27,8 @@ PibtOptions pibt_options(Params& p, bool paper) {
 }
 
 // Guidance replanned every step costs about one small search per agent per step; past
-// kLazyGuidanceAgents agents the default keeps paths lazily instead (fleets of 10,000).
+// kLazyGuidanceAgents agents the default keeps paths lazily instead (fleets of 10,000), and
+// updates them in two phases of map bands on the thread pool (local_guidance.hpp).
 constexpr int kLazyGuidanceAgents = 2000;
 
 LocalGuidanceConfig guidance_config(Params& p, int num_agents) {
@@ -39,6 +40,8 @@ LocalGuidanceConfig guidance_config(Params& p, int num_agents) {
   c.keep = p.get_int("lg-keep", c.keep, -1, 1000);
   c.keep_optimal = p.get_int("lg-keep-optimal", c.keep_optimal ? 1 : 0, 0, 1) == 1;
   c.max_expansions = p.get_int("lg-expansions", c.max_expansions, 1, 1 << 30);
+  c.phases = p.get_int("lg-phases", num_agents > kLazyGuidanceAgents ? 2 : 0, 0, 1000);
+  if (c.phases == 1) throw ParamError("parameter lg-phases must be 0 (sequential) or >= 2");
   return c;
 }
 

@@ -207,6 +207,64 @@ TEST(GdRhcrProduct, IdenticalResultsAcrossThreadCountsInBudgetMode) {
   }
 }
 
+TEST(GdRhcrProduct, BandedGuidanceIdenticalAcrossThreadCounts) {
+  // The parallel guidance update (bands of the map in two phases, lazy as past 2,000 agents)
+  // draws its random numbers per band and step, so the run does not depend on the threads.
+  Grid g = Grid::load(repo("maps/warehouse-10-20-10-2-1.map"));
+  auto starts = random_starts(g, 500, 5);
+  std::vector<std::vector<Cell>> first;
+  long first_searches = 0;
+  for (int threads : {1, 2, 3}) {
+    GdRhcrConfig cfg = product_budget_config();
+    cfg.threads = threads;
+    cfg.lg.phases = 2;
+    cfg.lg.lazy = true;
+    GdRhcrPlanner p(g, 500, 5, cfg);
+    RandomNavigationStream tasks(g, 5);
+    SimResult r = run(g, tasks, p, starts, 60);
+    EXPECT_GT(r.goals_reached, 0);
+    const long searches = p.stats()["guidance_searches"].get<long>();
+    EXPECT_GT(searches, 0);
+    if (first.empty()) {
+      first = r.paths, first_searches = searches;
+    } else {
+      EXPECT_EQ(r.paths, first) << threads << " threads";
+      EXPECT_EQ(searches, first_searches) << threads << " threads";
+    }
+  }
+}
+
+TEST(LocalGuidance, BandedUpdateKeepsApartAgentsApartAndRejectsOnePhase) {
+  // Bands of one phase are 2W cells apart or more: a search there cannot reach another's cells.
+  Grid g = Grid::load(repo("maps/empty-48-48.map"));
+  LocalGuidanceConfig cfg;
+  cfg.window = 6;
+  for (int phases : {2, 3, 5}) {
+    cfg.phases = phases;
+    LocalGuidance lg(g, 1, cfg);
+    EXPECT_GE(lg.band_width() * (phases - 1), 2 * cfg.window) << phases;
+  }
+  cfg.phases = 1;
+  EXPECT_THROW(LocalGuidance(g, 1, cfg), ParamError);
+  // Two agents at both ends of a row, each heading past the other's start (bands 0 and 3 of
+  // width 12): their banded paths are shortest walks from their own cells.
+  cfg.phases = 2;
+  LocalGuidance banded(g, 2, cfg);
+  DistTable dist(g);
+  std::vector<Cell> pos = {g.cell(1, 10), g.cell(46, 10)};
+  std::vector<std::vector<Cell>> goals = {{g.cell(40, 10)}, {g.cell(7, 10)}};
+  WorldView w{g, dist, 0, pos, goals};
+  banded.update(w, {0, 1});
+  for (int i : {0, 1}) {
+    const auto path = banded.path_from(i, 0);
+    ASSERT_EQ(static_cast<int>(path.size()), cfg.window + 1);
+    EXPECT_EQ(path[0], pos[i]);
+    EXPECT_TRUE(is_walk(g, path));
+    EXPECT_EQ(dist.get(goals[i][0], path.back()), dist.get(goals[i][0], pos[i]) - cfg.window);
+  }
+  EXPECT_EQ(banded.searches(), 2);
+}
+
 TEST(GdRhcrProduct, StepBudgetIsHonouredByCounting) {
   // A budget no solve can fit: every primary solve is skipped and counted, guidance is cut
   // short, the secondary solver moves everyone, and the run stays collision-free and moving.

@@ -11,10 +11,20 @@
 // not where its path says, when its goal changed, or when less than half the window is left.
 // The collision table counts, per (time mod (W+1), cell), the guidance paths there and, per
 // direction, those leaving the cell, so adding, removing and querying a path is O(W).
+//
+// Parallel update (fleets of thousands, issue 12): with `phases` P >= 2 the map is cut into
+// bands across its longer side, each ceil(2W / (P - 1)) cells wide, and band b is updated in
+// phase b mod P. After stale paths are dropped every path starts at its agent's cell, so a
+// search, its path and the path it replaces stay within W cells of the agent: two bands of one
+// phase never touch the same cell and are updated concurrently (oneTBB, the caller's arena).
+// Within a band agents go in the given order; a later phase sees the earlier phases' new paths.
+// Each band draws its random numbers from (seed, timestep, band), so results do not depend on
+// the number of threads.
 #pragma once
 
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -36,11 +46,13 @@ struct LocalGuidanceConfig {
   int keep = -1;                 // a kept path must still cover this many steps (-1: window / 2)
   uint64_t seed = 1;             // random order of neighbours in the search
   int recheck = 20;              // a kept path is replanned if it meets another path within this many steps
+  int phases = 0;                // 0: one sequential pass; P >= 2: banded parallel update (above)
 };
 
 class LocalGuidance {
  public:
   LocalGuidance(const Grid& grid, int num_agents, LocalGuidanceConfig config);
+  ~LocalGuidance();
 
   // Brings the guidance of `agents` up to date for timestep world.timestep, in the given order
   // (earlier agents' paths are seen by later ones). Paths of other agents stay in the table.
@@ -58,11 +70,13 @@ class LocalGuidance {
   // Agent i's guidance path from `now` on (empty when none).
   std::vector<Cell> path_from(int i, int now) const;
 
-  long searches() const { return searches_; }
-  long cut_short() const { return cut_short_; }
-  long kept() const { return kept_; }
-  long expansions() const { return expansions_; }
+  long searches() const { return counts_.searches; }
+  long cut_short() const { return counts_.cut_short; }
+  long kept() const { return counts_.kept; }
+  long expansions() const { return counts_.expansions; }
   const LocalGuidanceConfig& config() const { return cfg_; }
+  // Width of a band of the parallel update (0 when sequential).
+  int band_width() const;
 
  private:
   struct Node {
@@ -71,11 +85,39 @@ class LocalGuidance {
     Cell v;
     int32_t parent;
   };
+  struct OpenEntry {  // what the heap compares, kept inline for locality
+    float f;
+    int32_t t, id;
+  };
+  struct Counts {
+    long searches = 0, expansions = 0, cut_short = 0, kept = 0;
+    void add(const Counts& o);
+  };
+  // Per (t, cell): closed and seen marks (stamps of the search that set them) and the best g
+  // seen, side by side so a look-up touches one cache line.
+  struct Mark {
+    uint32_t closed, seen;
+    float best_g;
+  };
+  // One search's scratch: marks per (t, cell), node pool, open list. One per thread in the
+  // parallel update (marks are stamps, so which one a band gets does not matter).
+  struct Search {
+    std::vector<Mark> marks;
+    uint32_t stamp = 0;
+    std::vector<Node> nodes;
+    std::vector<OpenEntry> open;
+  };
+  struct Parallel;
   void drop_past(int i, int now);
   void enroll(int i, int sign);
   bool is_valid(const WorldView& world, int i) const;
-  bool still_optimal(const WorldView& world, int i);
-  void plan(const WorldView& world, int i);
+  bool still_optimal(const WorldView& world, int i, std::minstd_rand& rng);
+  void update_in_order(const WorldView& world, const std::vector<int>& agents,
+                       std::chrono::steady_clock::time_point deadline, Search& search,
+                       std::minstd_rand& rng, Counts& counts);
+  void update_banded(const WorldView& world, const std::vector<int>& agents,
+                     std::chrono::steady_clock::time_point deadline);
+  void plan(const WorldView& world, int i, Search& search, std::minstd_rand& rng, Counts& counts);
   int collisions(Cell from, Cell to, int abs_t) const;  // others' conflicts with from -> to at abs_t
   int slot(int abs_t) const { return abs_t % slots_; }
   int dir(Cell from, Cell to) const;
@@ -88,18 +130,11 @@ class LocalGuidance {
   std::vector<Cell> goal_;               // the goal each path was planned for
   std::vector<uint16_t> at_;             // [slot * cells + c]: paths at c
   std::vector<uint16_t> leaving_;        // [(slot * cells + c) * 4 + dir]: paths leaving c by dir
-  // Search scratch: closed marks stamped per (t, cell), node pool, open list.
-  std::vector<uint32_t> closed_, seen_;
-  std::vector<float> best_g_;
-  std::minstd_rand rng_;
-  uint32_t stamp_ = 0;
-  std::vector<Node> nodes_;
-  struct OpenEntry {  // what the heap compares, kept inline for locality
-    float f;
-    int32_t t, id;
-  };
-  std::vector<OpenEntry> open_;
-  long searches_ = 0, expansions_ = 0, cut_short_ = 0, kept_ = 0;
+  Search search_;         // the sequential update's scratch
+  std::minstd_rand rng_;  // the sequential update's random numbers
+  std::unique_ptr<Parallel> parallel_;  // per-thread scratch of the banded update
+  std::vector<std::vector<int>> band_agents_;
+  Counts counts_;
 };
 
 }  // namespace gdrhcr
