@@ -104,8 +104,15 @@ size_t DistRow::bytes() const {
 DistTable::DistTable(const Grid& grid, size_t budget_bytes)
     : DistTable(grid, std::vector<Cell>{}, budget_bytes) {}
 
+namespace {
+std::atomic<uint64_t> next_table_id{1};
+}  // namespace
+
 DistTable::DistTable(const Grid& grid, const std::vector<Cell>& blocked, size_t budget_bytes)
-    : grid_(grid), index_(std::make_shared<const FreeCellIndex>(grid, blocked)), budget_(budget_bytes) {}
+    : grid_(grid),
+      index_(std::make_shared<const FreeCellIndex>(grid, blocked)),
+      id_(next_table_id++),
+      budget_(budget_bytes) {}
 
 size_t DistTable::row_bytes() const {
   return sizeof(DistRow) + (size_t(index_->num_free) + 1) * (index_->wide() ? 4 : 2) + kEntryOverhead;

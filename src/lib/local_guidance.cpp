@@ -31,8 +31,7 @@ LocalGuidance::LocalGuidance(const Grid& grid, int num_agents, LocalGuidanceConf
       path_(num_agents),
       start_(num_agents, 0),
       goal_(num_agents, kNoCell),
-      at_(static_cast<size_t>(slots_) * grid.num_cells(), 0),
-      leaving_(static_cast<size_t>(slots_) * grid.num_cells() * 4, 0),
+      occ_(static_cast<size_t>(slots_) * grid.num_cells(), Occupancy{0, {0, 0, 0, 0}}),
       rng_(config.seed) {
   if (cfg_.window < 1) throw ParamError("local guidance: window must be >= 1");
   if (!(cfg_.collision_cost >= 0)) throw ParamError("local guidance: collision cost must be >= 0");
@@ -56,11 +55,10 @@ int LocalGuidance::dir(Cell from, Cell to) const {
 
 void LocalGuidance::enroll(int i, int sign) {
   const auto& p = path_[i];
-  const size_t cells = grid_.num_cells();
   for (size_t k = 0; k < p.size(); ++k) {
     const int s = slot(start_[i] + static_cast<int>(k));
-    at_[s * cells + p[k]] += sign;
-    if (k + 1 < p.size() && p[k + 1] != p[k]) leaving_[(s * cells + p[k]) * 4 + dir(p[k], p[k + 1])] += sign;
+    at(p[k], s) += sign;
+    if (k + 1 < p.size() && p[k + 1] != p[k]) leaving(p[k], s, dir(p[k], p[k + 1])) += sign;
   }
 }
 
@@ -83,11 +81,10 @@ void LocalGuidance::drop_past(int i, int now) {
     clear(i);
     return;
   }
-  const size_t cells = grid_.num_cells();
   for (int s = 0; s < k; ++s) {
     const int sl = slot(start_[i] + s);
-    at_[sl * cells + p[s]] -= 1;
-    if (p[s + 1] != p[s]) leaving_[(sl * cells + p[s]) * 4 + dir(p[s], p[s + 1])] -= 1;
+    at(p[s], sl) -= 1;
+    if (p[s + 1] != p[s]) leaving(p[s], sl, dir(p[s], p[s + 1])) -= 1;
   }
   p.erase(p.begin(), p.begin() + k);
   start_[i] = now;
@@ -103,9 +100,8 @@ void LocalGuidance::set_path(int i, int now, const std::vector<Cell>& path) {
 }
 
 int LocalGuidance::collisions(Cell from, Cell to, int abs_t) const {
-  const size_t cells = grid_.num_cells();
-  int c = at_[slot(abs_t + 1) * cells + to];
-  if (from != to) c += leaving_[(slot(abs_t) * cells + to) * 4 + dir(to, from)];
+  int c = at(to, slot(abs_t + 1));
+  if (from != to) c += leaving(to, slot(abs_t), dir(to, from));
   return c;
 }
 
@@ -119,11 +115,10 @@ bool LocalGuidance::is_valid(const WorldView& world, int i) const {
   const int keep = cfg_.keep >= 0 ? cfg_.keep : cfg_.window / 2;
   if (static_cast<int>(p.size()) <= keep + 1 && p.back() != goal) return false;
   // Replan a path that now meets another one (its own entries count once at each vertex).
-  const size_t cells = grid_.num_cells();
   const int horizon = std::min<int>(p.size(), cfg_.recheck + 1);
   for (int k = 1; k < horizon; ++k) {
-    if (at_[slot(start_[i] + k) * cells + p[k]] > 1) return false;
-    if (p[k] != p[k - 1] && leaving_[(slot(start_[i] + k - 1) * cells + p[k]) * 4 + dir(p[k], p[k - 1])] > 0)
+    if (at(p[k], slot(start_[i] + k)) > 1) return false;
+    if (p[k] != p[k - 1] && leaving(p[k], slot(start_[i] + k - 1), dir(p[k], p[k - 1])) > 0)
       return false;
   }
   return true;
@@ -138,14 +133,13 @@ bool LocalGuidance::still_optimal(const WorldView& world, int i, std::minstd_ran
   if (p.size() < 2 || start_[i] != world.timestep || p[0] != world.positions[i]) return false;
   const Cell goal = world.goals[i].empty() ? world.positions[i] : world.goals[i][0];
   if (goal_[i] != goal) return false;
-  const size_t cells = grid_.num_cells();
   const auto row_ptr = world.dist.row(goal);
   const DistRow& row = *row_ptr;
   const int h0 = row[p[0]];
   for (size_t k = 1; k < p.size(); ++k) {
     if (row[p[k]] != h0 - static_cast<int>(k)) return false;
-    if (at_[slot(start_[i] + k) * cells + p[k]] > 1) return false;
-    if (leaving_[(slot(start_[i] + k - 1) * cells + p[k]) * 4 + dir(p[k], p[k - 1])] > 0) return false;
+    if (at(p[k], slot(start_[i] + k)) > 1) return false;
+    if (leaving(p[k], slot(start_[i] + k - 1), dir(p[k], p[k - 1])) > 0) return false;
   }
   while (p.back() != goal && static_cast<int>(p.size()) < cfg_.window + 1) {
     const Cell last = p.back();
@@ -153,14 +147,14 @@ bool LocalGuidance::still_optimal(const WorldView& world, int i, std::minstd_ran
     Cell options[4];
     int m = 0;
     for (Cell u : grid_.neighbours(last))
-      if (row[u] == row[last] - 1 && at_[slot(t_last + 1) * cells + u] == 0 &&
-          leaving_[(slot(t_last) * cells + u) * 4 + dir(u, last)] == 0)
+      if (row[u] == row[last] - 1 && at(u, slot(t_last + 1)) == 0 &&
+          leaving(u, slot(t_last), dir(u, last)) == 0)
         options[m++] = u;
     if (m == 0) return false;
     const Cell u = options[m == 1 ? 0 : rng() % m];
     p.push_back(u);
-    at_[slot(t_last + 1) * cells + u] += 1;
-    leaving_[(slot(t_last) * cells + last) * 4 + dir(last, u)] += 1;
+    at(u, slot(t_last + 1)) += 1;
+    leaving(last, slot(t_last), dir(last, u)) += 1;
   }
   return true;
 }
@@ -290,7 +284,7 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
     const int32_t id = open.back().id;
     open.pop_back();
     const Node n = nodes[id];
-    uint32_t& mark = marks[static_cast<size_t>(n.t) * cells + n.v].closed;
+    uint32_t& mark = marks[static_cast<size_t>(n.v) * slots_ + n.t].closed;
     if (mark == stamp) continue;
     mark = stamp;
     // Done on the goal (the agent gets its next goal there): that path, even when a deeper node
@@ -305,7 +299,7 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
     // Done at the window's end (or out of expansions: the deepest cheapest node so far).
     if (n.t == W || ++expanded > cfg_.max_expansions) break;
     auto expand = [&](Cell u) {
-      Mark& mk = marks[static_cast<size_t>(n.t + 1) * cells + u];
+      Mark& mk = marks[static_cast<size_t>(u) * slots_ + n.t + 1];
       if (mk.closed == stamp) return;
       const int h = row[u];
       if (h >= kUnreachable) return;

@@ -52,6 +52,10 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   }
   preferred_ = preferred;
   immovable_ = world.immovable;
+  if (table_id_ != world.dist.id()) {  // rows kept from another table: drop them
+    for (auto& r : rows_) r.reset();
+    table_id_ = world.dist.id();
+  }
   order_.clear();
   if (agents.empty()) {
     order_.resize(n);
@@ -63,7 +67,7 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
     const Cell g = world.goals[i].empty() ? world.positions[i] : world.goals[i][0];
     update_priority(world, i, g);
     goal_of_[i] = g;
-    rows_[i] = world.dist.row(g);
+    if (!rows_[i] || rows_[i]->goal() != g) rows_[i] = world.dist.row(g);
     occupied_now_[world.positions[i]] = i;
     next[i] = kNoCell;
   }
@@ -85,7 +89,6 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   for (int i : order_) {
     occupied_now_[world.positions[i]] = kFree;
     occupied_next_[next[i]] = kFree;
-    rows_[i].reset();
   }
   for (auto& [from, to] : fixed_moves) {
     if (from != kNoCell) occupied_next_[from] = kFree;

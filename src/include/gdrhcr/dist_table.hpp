@@ -108,6 +108,9 @@ class DistTable {
   std::vector<std::shared_ptr<const DistRow>> rows(const std::vector<Cell>& goals) const;
 
   const Grid& grid() const { return grid_; }
+  // Unique per table in this process: a solver that keeps rows across calls knows whether they
+  // came from this table (a new table may reuse an old one's address).
+  uint64_t id() const { return id_; }
   size_t budget_bytes() const { return budget_; }
   size_t cached_rows() const;
   // Bytes of the cached rows (every live row the table handed out), exact.
@@ -132,6 +135,7 @@ class DistTable {
 
   const Grid& grid_;
   std::shared_ptr<const FreeCellIndex> index_;
+  uint64_t id_;
   size_t budget_;
   mutable std::shared_mutex mutex_;
   mutable std::unordered_map<Cell, std::unique_ptr<Entry>> rows_;

@@ -93,13 +93,13 @@ class LocalGuidance {
     long searches = 0, expansions = 0, cut_short = 0, kept = 0;
     void add(const Counts& o);
   };
-  // Per (t, cell): closed and seen marks (stamps of the search that set them) and the best g
+  // Per (cell, t): closed and seen marks (stamps of the search that set them) and the best g
   // seen, side by side so a look-up touches one cache line.
   struct Mark {
     uint32_t closed, seen;
     float best_g;
   };
-  // One search's scratch: marks per (t, cell), node pool, open list. One per thread in the
+  // One search's scratch: marks per (cell, t), node pool, open list. One per thread in the
   // parallel update (marks are stamps, so which one a band gets does not matter).
   struct Search {
     std::vector<Mark> marks;
@@ -128,8 +128,17 @@ class LocalGuidance {
   std::vector<std::vector<Cell>> path_;  // per agent: cells at start_[i], start_[i]+1, ...
   std::vector<int> start_;
   std::vector<Cell> goal_;               // the goal each path was planned for
-  std::vector<uint16_t> at_;             // [slot * cells + c]: paths at c
-  std::vector<uint16_t> leaving_;        // [(slot * cells + c) * 4 + dir]: paths leaving c by dir
+  // Per (cell, time slot), the slots of one cell side by side (a step's look-ups at t and t+1
+  // share a cache line): paths at the cell, and per direction paths leaving it.
+  struct Occupancy {
+    uint16_t at;
+    uint16_t leaving[4];
+  };
+  std::vector<Occupancy> occ_;
+  uint16_t& at(Cell c, int s) { return occ_[static_cast<size_t>(c) * slots_ + s].at; }
+  uint16_t at(Cell c, int s) const { return occ_[static_cast<size_t>(c) * slots_ + s].at; }
+  uint16_t& leaving(Cell c, int s, int d) { return occ_[static_cast<size_t>(c) * slots_ + s].leaving[d]; }
+  uint16_t leaving(Cell c, int s, int d) const { return occ_[static_cast<size_t>(c) * slots_ + s].leaving[d]; }
   Search search_;         // the sequential update's scratch
   std::minstd_rand rng_;  // the sequential update's random numbers
   std::unique_ptr<Parallel> parallel_;  // per-thread scratch of the banded update

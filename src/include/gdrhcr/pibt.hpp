@@ -78,7 +78,10 @@ class PibtStep {
   std::vector<double> priority_;           // elapsed steps + a per-agent tie-breaker in [0,1)
   std::vector<Cell> last_goal_;            // each agent's goal at its last update
   std::vector<int> occupied_now_, occupied_next_;  // agent per cell; -1 free, -2 held by a fixed move
-  std::vector<std::shared_ptr<const DistRow>> rows_;  // each agent's goal row, this step
+  // Each agent's goal row, kept across calls while its goal stays (one hash look-up per agent
+  // per step saved at 10,000 agents); at most one row per agent is held, as during a step.
+  std::vector<std::shared_ptr<const DistRow>> rows_;
+  uint64_t table_id_ = 0;  // the DistTable those rows came from
   std::vector<Cell> goal_of_;                         // each agent's goal, this step
   const std::vector<Cell>* preferred_ = nullptr;
   const std::vector<uint8_t>* immovable_ = nullptr;
