@@ -11,6 +11,7 @@
 #include <functional>
 #include <random>
 
+#include "gd_rhcr_planner/delayed_fleet.hpp"
 #include "gd_rhcr_planner/execution.hpp"
 #include "gd_rhcr_planner/map_loader.hpp"
 #include "gdrhcr/planner.hpp"
@@ -170,140 +171,11 @@ TEST(Executor, BadModeAndHorizonAreRejected) {
 
 namespace {
 
-constexpr int kSub = 10;  // substeps per tick
-
-struct SimRobot {
-  Cell cell = kNoCell, dst = kNoCell;
-  bool moving = false;
-  int left = 0;         // substeps of the current move still to go
-  int speed = kSub;     // substeps per move
-  int delay = 0;        // substeps of delay left
-  bool missing = false, silent = false, offline = false;
-  Cell fake = kNoCell;  // reports this cell instead of its own (an inconsistent report)
-  Cell goal = kNoCell;
-  int goals_reached = 0;
-  int moves = 0;
-};
-
 struct SimResult {
   int goals = 0, goals_tail = 0, ticks = 0;
   std::vector<int> moves_tail;  // moves per robot after the delays stopped
   int max_wait_tail = 0;        // longest stretch a healthy robot waited on a committed move, tail
   std::vector<std::vector<int>> health_ticks;  // per robot, ticks spent in each RobotHealth
-};
-
-class FleetSim {
- public:
-  FleetSim(const Grid& g, int n, uint64_t seed) : g_(g), rng_(seed), robots_(n) {
-    std::vector<Cell> free = g.free_cells();
-    std::shuffle(free.begin(), free.end(), rng_);
-    std::uniform_int_distribution<int> speed(3, 14);  // 0.3 .. 1.4 ticks per move
-    for (int i = 0; i < n; ++i) {
-      robots_[i].cell = free[i];
-      robots_[i].speed = speed(rng_);
-      robots_[i].goal = random_cell();
-    }
-  }
-  Cell random_cell() {
-    const auto& f = g_.free_cells();
-    return f[std::uniform_int_distribution<size_t>(0, f.size() - 1)(rng_)];
-  }
-  std::vector<SimRobot>& robots() { return robots_; }
-
-  std::vector<RobotRecord> records() const {
-    std::vector<RobotRecord> out(robots_.size());
-    for (size_t i = 0; i < robots_.size(); ++i) {
-      const SimRobot& s = robots_[i];
-      if (s.missing) continue;
-      out[i].reported = true;
-      out[i].cell = s.fake != kNoCell ? s.fake : s.cell;
-      out[i].moving = s.moving;
-      out[i].reported_offline = s.offline;
-      out[i].offline = s.offline || s.silent;
-      out[i].silent = s.silent;
-    }
-    return out;
-  }
-  // Fills goals and counts goals reached (a robot at rest on its goal gets a new one).
-  // A goal under a robot that will not move is given up for another (as the fleet requeues
-  // tasks under offline robots).
-  std::vector<std::vector<Cell>> goals(int& reached) {
-    std::vector<std::vector<Cell>> out(robots_.size());
-    std::unordered_map<Cell, int> dead;
-    for (const SimRobot& s : robots_)
-      if (!s.missing && (s.silent || s.offline)) dead[s.cell] = 1, dead[s.moving ? s.dst : s.cell] = 1;
-    for (size_t i = 0; i < robots_.size(); ++i) {
-      SimRobot& s = robots_[i];
-      while (dead.count(s.goal)) s.goal = random_cell();
-      if (!s.moving && s.cell == s.goal && !s.missing && !s.silent && !s.offline) {
-        ++reached;
-        ++s.goals_reached;
-        s.goal = random_cell();
-      }
-      out[i] = {s.offline || s.silent ? s.cell : s.goal};
-    }
-    return out;
-  }
-  // Applies the commands (checks them) and runs one tick of motion with delays.
-  void execute(const TickOutput& out, double p_delay, int max_delay_ticks) {
-    std::uniform_real_distribution<double> u(0, 1);
-    std::uniform_int_distribution<int> d(1, std::max(1, max_delay_ticks));
-    for (size_t i = 0; i < robots_.size(); ++i) {
-      SimRobot& s = robots_[i];
-      if (s.missing || s.silent) continue;
-      if (s.delay == 0 && p_delay > 0 && u(rng_) < p_delay) s.delay = d(rng_) * kSub;
-      const Cell c = out.command[i];
-      if (c == kNoCell) continue;
-      if (s.moving) {
-        ASSERT_EQ(c, s.dst) << "robot " << i << " is moving to " << g_.describe(s.dst) << " but was commanded "
-                            << g_.describe(c);
-        continue;
-      }
-      if (s.offline || s.fake != kNoCell) continue;  // will not move
-      if (c == s.cell || s.delay > 0) continue;
-      ASSERT_TRUE(g_.step_allowed(s.cell, c)) << "robot " << i << ": " << g_.describe(s.cell) << " -> " << g_.describe(c);
-      s.moving = true;
-      s.dst = c;
-      s.left = s.speed;
-      ++s.moves;
-    }
-    for (int k = 0; k < kSub; ++k) {
-      for (SimRobot& s : robots_) {
-        if (s.silent) continue;
-        if (s.delay > 0) {
-          --s.delay;
-          continue;
-        }
-        if (s.moving && --s.left <= 0) {
-          s.cell = s.dst;
-          s.moving = false;
-        }
-      }
-      check_physical();
-      if (::testing::Test::HasFatalFailure()) return;
-    }
-  }
-  // No cell holds two robots; a moving robot holds both its cells.
-  void check_physical() {
-    std::unordered_map<Cell, int> at;
-    for (size_t i = 0; i < robots_.size(); ++i) {
-      const SimRobot& s = robots_[i];
-      if (s.missing) continue;
-      for (Cell c : {s.cell, s.moving ? s.dst : kNoCell}) {
-        if (c == kNoCell) continue;
-        auto [it, fresh] = at.emplace(c, static_cast<int>(i));
-        if (!fresh) collision_cell = c;
-        ASSERT_TRUE(fresh) << "robots " << it->second << " and " << i << " share cell " << g_.describe(c);
-      }
-    }
-  }
-
-  Cell collision_cell = kNoCell;
-
- private:
-  const Grid& g_;
-  std::mt19937_64 rng_;
-  std::vector<SimRobot> robots_;
 };
 
 // Seeds per randomised test: the default, or EXEC_TEST_SEEDS (a longer soak by hand).
@@ -319,7 +191,7 @@ const Grid& small_warehouse() {
 
 // Runs `ticks` ticks with delays, then `tail` ticks without.
 SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int ticks, int tail, double p_delay,
-                    int max_delay, const std::function<void(int, FleetSim&)>& faults = nullptr,
+                    int max_delay, const std::function<void(int, DelayedFleet&)>& faults = nullptr,
                     ExecutionMode mode = ExecutionMode::kAdg) {
   const Grid& g = small_warehouse();
   gdrhcr::DistTable dist(g);
@@ -330,7 +202,7 @@ SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int t
   ExecutorConfig cfg;
   cfg.mode = mode;
   Executor ex(g, dist, n, cfg);
-  FleetSim sim(g, n, seed);
+  DelayedFleet sim(g, n, seed);
   SimResult res;
   res.moves_tail.assign(n, 0);
   res.health_ticks.assign(n, std::vector<int>(5, 0));
@@ -354,8 +226,9 @@ SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int t
     }
     std::vector<int> before(n);
     for (int i = 0; i < n; ++i) before[i] = sim.robots()[i].moves;
-    sim.execute(out, t < ticks ? p_delay : 0.0, max_delay);
-    if (::testing::Test::HasFatalFailure()) {
+    const std::string bad = sim.execute(out, t < ticks ? p_delay : 0.0, max_delay);
+    if (!bad.empty()) {
+      ADD_FAILURE() << bad;
       ADD_FAILURE() << "planner " << planner_name << " seed " << seed << " tick " << t << " queue at the collision: "
                     << (sim.collision_cell != kNoCell ? ex.debug_queue(sim.collision_cell) : std::string("-"));
       return res;
@@ -419,7 +292,7 @@ TEST(ExecutorAdg, BadRobotsBecomeObstaclesAndTheRestKeepsMoving) {
   for (uint64_t seed = 1; seed <= seeds(10); ++seed) {
     const Grid& g = small_warehouse();
     int fake_from = -1;
-    auto faults = [&](int t, FleetSim& sim) {
+    auto faults = [&](int t, DelayedFleet& sim) {
       auto& r = sim.robots();
       if (t == 0) r[0].missing = true;
       if (t == 30 && !r[1].silent) r[1].silent = true;

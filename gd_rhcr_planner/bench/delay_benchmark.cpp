@@ -1,0 +1,125 @@
+// Delay-robust execution without ROS (issue 13): the planner node's execution layer (Executor,
+// ADG or lock-step) and a core planner drive simulated robots (delayed_fleet.hpp: no safety
+// interlock, LoRR-2026 random delays) with random goals; once without delays and once with
+// p_delay per robot and tick, delays of 1..D ticks. Prints goals reached per tick, the ratio with
+// delays to without, and robots delayed and waiting per tick; any collision, bad command or
+// broken ADG invariant aborts the run. A benchmark (prints figures), not a test; seconds per run,
+// so ideas can be tried here before the ROS benchmark (scripts/bench_delays.sh).
+//   delay_benchmark --map maps/warehouse-10-20-10-2-1.map --robots 300 --ticks 300 --p-delay 0.01
+//       --max-delay 20 --planner gd-rhcr --execution adg --speed 6 --seeds 1
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "gd_rhcr_planner/delayed_fleet.hpp"
+#include "gd_rhcr_planner/execution.hpp"
+#include "gd_rhcr_planner/map_loader.hpp"
+#include "gdrhcr/params.hpp"
+#include "gdrhcr/planner.hpp"
+
+using namespace gd_rhcr_planner;
+
+namespace {
+
+struct Options {
+  std::string map = "maps/warehouse-10-20-10-2-1.map", planner = "gd-rhcr", execution = "adg";
+  int robots = 300, ticks = 300, max_delay = 20, speed = 6, seeds = 1;
+  double p_delay = 0.01;
+};
+
+struct Result {
+  int goals = 0;
+  double delayed = 0, waiting = 0;  // per tick
+  std::string error;
+};
+
+Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t seed) {
+  gdrhcr::DistTable dist(g);
+  gdrhcr::Params params, none;
+  // Node-budget mode: the same plans on any machine (no timeouts).
+  if (o.planner == "gd-rhcr") params.set("timeout", "1e6"), params.set("node-budget", "2000");
+  DeadlinePlanner planner(gdrhcr::make_planner(o.planner, params, g, o.robots, seed),
+                          gdrhcr::make_planner("pibt", none, g, o.robots, seed));
+  ExecutorConfig cfg;
+  cfg.mode = parse_execution_mode(o.execution);
+  Executor ex(g, dist, o.robots, cfg);
+  DelayedFleet fleet(g, o.robots, seed, o.speed, o.speed);
+  Result r;
+  for (int t = 0; t < o.ticks; ++t) {
+    auto goals = fleet.goals(r.goals);
+    const TickOutput out = ex.tick(fleet.records(), goals, planner, true);
+    if (!out.stepped) r.error = "no step: " + out.skip_reason;
+    else if (!out.plan_error.empty()) r.error = "plan rejected: " + out.plan_error;
+    else if (cfg.mode == ExecutionMode::kAdg) r.error = ex.check_invariants();
+    if (r.error.empty()) r.error = fleet.execute(out, p_delay, o.max_delay);
+    if (!r.error.empty()) {
+      r.error = "tick " + std::to_string(t) + ": " + r.error;
+      return r;
+    }
+    r.delayed += fleet.delayed();
+    r.waiting += out.waiting;
+  }
+  r.delayed /= o.ticks;
+  r.waiting /= o.ticks;
+  return r;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string k = argv[i], v = argv[i + 1];
+    if (k == "--map") o.map = v;
+    else if (k == "--planner") o.planner = v;
+    else if (k == "--execution") o.execution = v;
+    else if (k == "--robots") o.robots = std::atoi(v.c_str());
+    else if (k == "--ticks") o.ticks = std::atoi(v.c_str());
+    else if (k == "--max-delay") o.max_delay = std::atoi(v.c_str());
+    else if (k == "--speed") o.speed = std::atoi(v.c_str());
+    else if (k == "--seeds") o.seeds = std::atoi(v.c_str());
+    else if (k == "--p-delay") o.p_delay = std::atof(v.c_str());
+    else {
+      std::fprintf(stderr,
+                   "unknown option %s (--map --planner --execution --robots --ticks --p-delay --max-delay --speed "
+                   "--seeds)\n",
+                   k.c_str());
+      return 2;
+    }
+  }
+  if (o.robots < 1 || o.ticks < 1 || o.seeds < 1 || o.max_delay < 1 || o.speed < 1 || o.speed > SimRobot::kSub ||
+      !(o.p_delay >= 0 && o.p_delay <= 1)) {
+    std::fprintf(stderr, "--robots, --ticks, --seeds, --max-delay must be >= 1, --speed in 1..%d (substeps of a "
+                 "tick per move), --p-delay in [0, 1]\n", SimRobot::kSub);
+    return 2;
+  }
+  try {
+    parse_execution_mode(o.execution);
+    const LoadedMap map = load_map(o.map, 1.0);
+    std::printf("map %s, %d robots, planner %s, execution %s, %d ticks, moves take %.1f tick, delays p %.3f "
+                "per tick of 1..%d ticks, random goals\n",
+                o.map.c_str(), o.robots, o.planner.c_str(), o.execution.c_str(), o.ticks,
+                o.speed / double(SimRobot::kSub), o.p_delay, o.max_delay);
+    std::printf("%5s %14s %14s %7s %16s %16s\n", "seed", "goals/tick no", "goals/tick p", "ratio",
+                "delayed robots", "waiting robots");
+    double sum_ratio = 0;
+    for (int s = 1; s <= o.seeds; ++s) {
+      const Result a = run(map.grid, o, 0.0, s), b = run(map.grid, o, o.p_delay, s);
+      for (const Result* r : {&a, &b})
+        if (!r->error.empty()) {
+          std::printf("seed %d: %s\n", s, r->error.c_str());
+          return 1;
+        }
+      const double ta = double(a.goals) / o.ticks, tb = double(b.goals) / o.ticks;
+      sum_ratio += tb / ta;
+      std::printf("%5d %14.3f %14.3f %6.1f%% %16.1f %16.1f\n", s, ta, tb, 100 * tb / ta, b.delayed, b.waiting);
+      std::fflush(stdout);
+    }
+    std::printf("mean ratio %.1f%%\n", 100 * sum_ratio / o.seeds);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "delay_benchmark: %s\n", e.what());
+    return 2;
+  }
+  return 0;
+}

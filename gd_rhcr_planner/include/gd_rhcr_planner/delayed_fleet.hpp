@@ -1,0 +1,65 @@
+// Simulated robots for the execution layer (execution.hpp), ROS-free: robots that start a
+// commanded move at once (no safety interlock), move at different speeds, occupy both cells while
+// moving, and pause for random delays as in the League of Robot Runners 2026 (a delay starts on a
+// tick with probability p_delay and lasts a uniform 1..D ticks; a robot at rest does not start its
+// move, a moving robot stops where it is). Used by execution_test.cpp (any delay pattern: no
+// collision, no deadlock) and bench/delay_benchmark.cpp (throughput with and without delays).
+// fleet_sim (the ROS simulator) models the same robots over topics.
+#pragma once
+
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "gd_rhcr_planner/execution.hpp"
+#include "gdrhcr/grid.hpp"
+
+namespace gd_rhcr_planner {
+
+struct SimRobot {
+  static constexpr int kSub = 10;  // substeps per tick
+  gdrhcr::Cell cell = gdrhcr::kNoCell, dst = gdrhcr::kNoCell;
+  bool moving = false;
+  int left = 0;         // substeps of the current move still to go
+  int speed = kSub;     // substeps per move
+  int delay = 0;        // substeps of delay left
+  bool missing = false, silent = false, offline = false;
+  gdrhcr::Cell fake = gdrhcr::kNoCell;  // reports this cell instead of its own (an inconsistent report)
+  gdrhcr::Cell goal = gdrhcr::kNoCell;
+  int goals_reached = 0;
+  int moves = 0;
+};
+
+class DelayedFleet {
+ public:
+  // n robots on distinct random free cells, each with a random goal and a speed drawn uniformly
+  // from [min_speed, max_speed] substeps per move (SimRobot::kSub substeps make a tick).
+  DelayedFleet(const gdrhcr::Grid& g, int n, uint64_t seed, int min_speed = 3, int max_speed = 14);
+
+  std::vector<SimRobot>& robots() { return robots_; }
+  // What the robots report (Fleet::robot's records): missing robots report nothing.
+  std::vector<RobotRecord> records() const;
+  // Goals for Executor::tick; a robot at rest on its goal counts a goal reached (added to
+  // `reached`) and gets a new random one. A goal under a robot that will not move is replaced
+  // (as the fleet requeues tasks under offline robots).
+  std::vector<std::vector<gdrhcr::Cell>> goals(int& reached);
+  // Applies the commands and runs one tick of motion with delays (p_delay per robot and tick,
+  // 1..max_delay_ticks ticks). Returns "" or what went wrong: a bad command (a moving robot told
+  // another cell, a move to a non-neighbour) or two robots in one cell (collision_cell says where).
+  std::string execute(const TickOutput& out, double p_delay, int max_delay_ticks);
+  // Robots delayed right now.
+  int delayed() const;
+
+  gdrhcr::Cell collision_cell = gdrhcr::kNoCell;
+
+ private:
+  gdrhcr::Cell random_cell();
+  std::string check_physical();
+
+  const gdrhcr::Grid& g_;
+  std::mt19937_64 rng_;
+  std::vector<SimRobot> robots_;
+};
+
+}  // namespace gd_rhcr_planner

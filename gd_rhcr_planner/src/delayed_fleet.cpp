@@ -1,0 +1,128 @@
+// Simulated delayed robots for execution tests and benchmarks; see delayed_fleet.hpp.
+#include "gd_rhcr_planner/delayed_fleet.hpp"
+
+#include <algorithm>
+#include <unordered_map>
+
+namespace gd_rhcr_planner {
+
+using gdrhcr::Cell;
+using gdrhcr::kNoCell;
+
+DelayedFleet::DelayedFleet(const gdrhcr::Grid& g, int n, uint64_t seed, int min_speed, int max_speed)
+    : g_(g), rng_(seed), robots_(n) {
+  std::vector<Cell> free = g.free_cells();
+  std::shuffle(free.begin(), free.end(), rng_);
+  std::uniform_int_distribution<int> speed(min_speed, max_speed);
+  for (int i = 0; i < n; ++i) {
+    robots_[i].cell = free[i];
+    robots_[i].speed = speed(rng_);
+    robots_[i].goal = random_cell();
+  }
+}
+
+Cell DelayedFleet::random_cell() {
+  const auto& f = g_.free_cells();
+  return f[std::uniform_int_distribution<size_t>(0, f.size() - 1)(rng_)];
+}
+
+std::vector<RobotRecord> DelayedFleet::records() const {
+  std::vector<RobotRecord> out(robots_.size());
+  for (size_t i = 0; i < robots_.size(); ++i) {
+    const SimRobot& s = robots_[i];
+    if (s.missing) continue;
+    out[i].reported = true;
+    out[i].cell = s.fake != kNoCell ? s.fake : s.cell;
+    out[i].moving = s.moving;
+    out[i].reported_offline = s.offline;
+    out[i].offline = s.offline || s.silent;
+    out[i].silent = s.silent;
+  }
+  return out;
+}
+
+std::vector<std::vector<Cell>> DelayedFleet::goals(int& reached) {
+  std::vector<std::vector<Cell>> out(robots_.size());
+  std::unordered_map<Cell, int> dead;
+  for (const SimRobot& s : robots_)
+    if (!s.missing && (s.silent || s.offline)) dead[s.cell] = 1, dead[s.moving ? s.dst : s.cell] = 1;
+  for (size_t i = 0; i < robots_.size(); ++i) {
+    SimRobot& s = robots_[i];
+    while (dead.count(s.goal)) s.goal = random_cell();
+    if (!s.moving && s.cell == s.goal && !s.missing && !s.silent && !s.offline) {
+      ++reached;
+      ++s.goals_reached;
+      s.goal = random_cell();
+    }
+    out[i] = {s.offline || s.silent ? s.cell : s.goal};
+  }
+  return out;
+}
+
+std::string DelayedFleet::execute(const TickOutput& out, double p_delay, int max_delay_ticks) {
+  std::uniform_real_distribution<double> u(0, 1);
+  std::uniform_int_distribution<int> d(1, std::max(1, max_delay_ticks));
+  for (size_t i = 0; i < robots_.size(); ++i) {
+    SimRobot& s = robots_[i];
+    if (s.missing || s.silent) continue;
+    if (s.delay == 0 && p_delay > 0 && u(rng_) < p_delay) s.delay = d(rng_) * SimRobot::kSub;
+    const Cell c = out.command[i];
+    if (c == kNoCell) continue;
+    if (s.moving) {
+      if (c != s.dst)
+        return "robot " + std::to_string(i) + " is moving to " + g_.describe(s.dst) + " but was commanded " +
+               g_.describe(c);
+      continue;
+    }
+    if (s.offline || s.fake != kNoCell) continue;  // will not move
+    if (c == s.cell || s.delay > 0) continue;
+    if (!g_.step_allowed(s.cell, c))
+      return "robot " + std::to_string(i) + ": " + g_.describe(s.cell) + " -> " + g_.describe(c);
+    s.moving = true;
+    s.dst = c;
+    s.left = s.speed;
+    ++s.moves;
+  }
+  for (int k = 0; k < SimRobot::kSub; ++k) {
+    for (SimRobot& s : robots_) {
+      if (s.silent) continue;
+      if (s.delay > 0) {
+        --s.delay;
+        continue;
+      }
+      if (s.moving && --s.left <= 0) {
+        s.cell = s.dst;
+        s.moving = false;
+      }
+    }
+    std::string err = check_physical();
+    if (!err.empty()) return err;
+  }
+  return "";
+}
+
+// No cell holds two robots; a moving robot holds both its cells.
+std::string DelayedFleet::check_physical() {
+  std::unordered_map<Cell, int> at;
+  for (size_t i = 0; i < robots_.size(); ++i) {
+    const SimRobot& s = robots_[i];
+    if (s.missing) continue;
+    for (Cell c : {s.cell, s.moving ? s.dst : kNoCell}) {
+      if (c == kNoCell) continue;
+      auto [it, fresh] = at.emplace(c, static_cast<int>(i));
+      if (!fresh) {
+        collision_cell = c;
+        return "robots " + std::to_string(it->second) + " and " + std::to_string(i) + " share cell " + g_.describe(c);
+      }
+    }
+  }
+  return "";
+}
+
+int DelayedFleet::delayed() const {
+  int n = 0;
+  for (const SimRobot& s : robots_) n += s.delay > 0;
+  return n;
+}
+
+}  // namespace gd_rhcr_planner
