@@ -6,7 +6,7 @@
 // broken ADG invariant aborts the run. A benchmark (prints figures), not a test; seconds per run,
 // so ideas can be tried here before the ROS benchmark (scripts/bench_delays.sh).
 //   delay_benchmark --map maps/warehouse-10-20-10-2-1.map --robots 300 --ticks 300 --p-delay 0.01
-//       --max-delay 20 --planner gd-rhcr --execution adg --speed 6 --seeds 1
+//       --max-delay 20 --planner gd-rhcr --execution adg --speed 6 --seeds 1 --commit-horizon 1
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -24,7 +24,7 @@ namespace {
 
 struct Options {
   std::string map = "maps/warehouse-10-20-10-2-1.map", planner = "gd-rhcr", execution = "adg";
-  int robots = 300, ticks = 300, max_delay = 20, speed = 6, seeds = 1;
+  int robots = 300, ticks = 300, max_delay = 20, speed = 6, seeds = 1, commit_horizon = 1;
   double p_delay = 0.01;
 };
 
@@ -43,6 +43,7 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
                           gdrhcr::make_planner("pibt", none, g, o.robots, seed));
   ExecutorConfig cfg;
   cfg.mode = parse_execution_mode(o.execution);
+  cfg.commit_horizon = o.commit_horizon;
   Executor ex(g, dist, o.robots, cfg);
   DelayedFleet fleet(g, o.robots, seed, o.speed, o.speed);
   Result r;
@@ -79,27 +80,28 @@ int main(int argc, char** argv) {
     else if (k == "--max-delay") o.max_delay = std::atoi(v.c_str());
     else if (k == "--speed") o.speed = std::atoi(v.c_str());
     else if (k == "--seeds") o.seeds = std::atoi(v.c_str());
+    else if (k == "--commit-horizon") o.commit_horizon = std::atoi(v.c_str());
     else if (k == "--p-delay") o.p_delay = std::atof(v.c_str());
     else {
       std::fprintf(stderr,
                    "unknown option %s (--map --planner --execution --robots --ticks --p-delay --max-delay --speed "
-                   "--seeds)\n",
+                   "--seeds --commit-horizon)\n",
                    k.c_str());
       return 2;
     }
   }
-  if (o.robots < 1 || o.ticks < 1 || o.seeds < 1 || o.max_delay < 1 || o.speed < 1 || o.speed > SimRobot::kSub ||
+  if (o.robots < 1 || o.ticks < 1 || o.seeds < 1 || o.max_delay < 1 || o.commit_horizon < 1 || o.speed < 1 || o.speed > SimRobot::kSub ||
       !(o.p_delay >= 0 && o.p_delay <= 1)) {
-    std::fprintf(stderr, "--robots, --ticks, --seeds, --max-delay must be >= 1, --speed in 1..%d (substeps of a "
+    std::fprintf(stderr, "--robots, --ticks, --seeds, --max-delay, --commit-horizon must be >= 1, --speed in 1..%d (substeps of a "
                  "tick per move), --p-delay in [0, 1]\n", SimRobot::kSub);
     return 2;
   }
   try {
     parse_execution_mode(o.execution);
     const LoadedMap map = load_map(o.map, 1.0);
-    std::printf("map %s, %d robots, planner %s, execution %s, %d ticks, moves take %.1f tick, delays p %.3f "
-                "per tick of 1..%d ticks, random goals\n",
-                o.map.c_str(), o.robots, o.planner.c_str(), o.execution.c_str(), o.ticks,
+    std::printf("map %s, %d robots, planner %s, execution %s (commit horizon %d), %d ticks, moves take %.1f tick, "
+                "delays p %.3f per tick of 1..%d ticks, random goals\n",
+                o.map.c_str(), o.robots, o.planner.c_str(), o.execution.c_str(), o.commit_horizon, o.ticks,
                 o.speed / double(SimRobot::kSub), o.p_delay, o.max_delay);
     std::printf("%5s %14s %14s %7s %16s %16s\n", "seed", "goals/tick no", "goals/tick p", "ratio",
                 "delayed robots", "waiting robots");
