@@ -1,6 +1,7 @@
 #include "gdrhcr/gd_rhcr.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 #include <array>
 #include <chrono>
 
@@ -350,10 +351,13 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
 // The final check: if the assembled step has a collision (possible only for V < 2 or with
 // stale plans), the groups involved are re-moved together by PIBT with every other move fixed;
 // groups whose fixed move enters a re-moved agent's cell join them (PIBT must be free to keep
-// an agent in place). Returns true when anything was repaired.
+// an agent in place). Returns true when anything was repaired. Every round re-moves more agents
+// than the last; a collision that stays with no new agent to re-move cannot be repaired (the
+// input is impossible, e.g. two agents in one cell) and throws instead of looping for ever.
 bool GdRhcrPlanner::repair_step(const WorldView& world, std::vector<Cell>& next,
                                 std::vector<uint8_t>& repaired) {
   bool any = false;
+  size_t last_round = 0;
   for (;;) {
     auto v = validator_.check(world.positions, next);
     if (!v) return any;
@@ -380,6 +384,10 @@ bool GdRhcrPlanner::repair_step(const WorldView& world, std::vector<Cell>& next,
         if (k >= 0 && k != j && in_set[k]) add_group(j), grew = true;
       }
     }
+    if (any && last_round > 0 && agents.size() <= last_round)
+      throw std::runtime_error("gd-rhcr: no collision-free step: " + v->describe(grid_, world.timestep) +
+                               " persists with every agent involved re-moved (do two agents start in one cell?)");
+    last_round = agents.size();
     std::vector<Cell> fixed_next(next);
     for (int i : agents) fixed_next[i] = kNoCell;
     run_secondary(world, agents, fixed_next, next);

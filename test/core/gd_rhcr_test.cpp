@@ -214,3 +214,23 @@ TEST(GdRhcr, LargeGroupsUseTheSecondarySolver) {
   EXPECT_GT(p.stats()["threshold_fallbacks"].get<long>(), 0);
   EXPECT_GT(p.stats()["primary_calls"].get<long>(), 0);
 }
+
+// Two agents in one cell is input no step can fix: plan_step says so instead of repairing for
+// ever (it used to loop in repair_step; the ROS node's planner worker would never return).
+TEST(GdRhcr, TwoAgentsInOneCellIsAnErrorNotAHang) {
+  Grid g = Grid::from_rows({"@.@", "@@@"});
+  DistTable dist(g);
+  for (GdRhcrConfig c : {GdRhcrConfig::paper(), GdRhcrConfig::product()}) {
+    GdRhcrPlanner p(g, 2, 1, c);
+    std::vector<Cell> pos = {g.cell(1, 0), g.cell(1, 0)};
+    std::vector<std::vector<Cell>> goals = {{g.cell(1, 0)}, {g.cell(1, 0)}};
+    WorldView w{g, dist, 0, pos, goals};
+    std::vector<Cell> next(2, kNoCell);
+    try {
+      p.plan_step(w, next);
+      ADD_FAILURE() << "no error";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("no collision-free step"), std::string::npos) << e.what();
+    }
+  }
+}
