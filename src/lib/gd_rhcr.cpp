@@ -1,9 +1,9 @@
 #include "gdrhcr/gd_rhcr.hpp"
 
 #include <algorithm>
-#include <stdexcept>
 #include <array>
 #include <chrono>
+#include <stdexcept>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
