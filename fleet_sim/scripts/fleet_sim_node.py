@@ -4,8 +4,9 @@
 Waits for the latched `map` (nav_msgs/OccupancyGrid), places ~num_robots robots on distinct
 free cells (seeded), and executes `step_commands`: each robot moves to its commanded cell,
 taking ~move_fraction of the tick period, and switches its reported cell on arrival. Robots
-publish `robot_states` (gd_rhcr_msgs/RobotStateArray) and tf map -> robot_N/base_link with a
-smoothly interpolated pose. Like a real robot's safety stop (the interlock), a robot never starts
+publish `robot_states` (gd_rhcr_msgs/RobotStateArray) and tf map -> <~tf_prefix>robot_N/base_link
+with a smoothly interpolated pose (~tf_prefix, default empty: e.g. "fleet_a/" keeps two fleets'
+robot frames apart). Like a real robot's safety stop (the interlock), a robot never starts
 a move into a cell held by a robot that is not leaving it, or that a robot still moving is
 entering (counted as `blocked moves` on /diagnostics; zero when the planner's commands are
 followed by everyone).
@@ -113,6 +114,9 @@ class FleetSim(object):
         self.delays_started = 0
         self.tf_enabled = rospy.get_param("~publish_tf", True)
         self.frame = rospy.get_param("~frame_id", "map")
+        self.tf_prefix = str(rospy.get_param("~tf_prefix", ""))
+        if self.tf_prefix and not self.tf_prefix.endswith("/"):
+            self.tf_prefix += "/"
         self.lock = threading.Lock()
         self.grid = None
         self.robots = []
@@ -371,7 +375,7 @@ class FleetSim(object):
                     t = TransformStamped()
                     t.header.stamp = stamp
                     t.header.frame_id = self.frame
-                    t.child_frame_id = "robot_%d/base_link" % r.id
+                    t.child_frame_id = "%srobot_%d/base_link" % (self.tf_prefix, r.id)
                     t.transform.translation.x, t.transform.translation.y = px, py
                     (t.transform.rotation.x, t.transform.rotation.y,
                      t.transform.rotation.z, t.transform.rotation.w) = q

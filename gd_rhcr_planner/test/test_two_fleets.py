@@ -61,6 +61,17 @@ class TwoFleets(unittest.TestCase):
         tf2_ros.TransformListener(buf)
         t = buf.lookup_transform("world", "fleet_b/map", rospy.Time(0), rospy.Duration(10.0))
         self.assertAlmostEqual(t.transform.translation.x, 40.0)
+        # Each fleet's robots in tf under its own prefix, in its own map frame: robot 0 of
+        # fleet_b is at least offset_b (40 m) right of fleet_a's origin; fleet_a's is inside its
+        # map (warehouse_small, 32 m wide).
+        a = buf.lookup_transform("world", "fleet_a/robot_0/base_link", rospy.Time(0), rospy.Duration(10.0))
+        b = buf.lookup_transform("world", "fleet_b/robot_0/base_link", rospy.Time(0), rospy.Duration(10.0))
+        self.assertLess(a.transform.translation.x, 32.0)
+        self.assertGreaterEqual(b.transform.translation.x, 40.0)
+        self.assertEqual(buf.lookup_transform("fleet_a/map", "fleet_a/robot_0/base_link", rospy.Time(0)).header.frame_id,
+                         "fleet_a/map")
+        self.assertFalse(buf.can_transform("world", "robot_0/base_link", rospy.Time(0)),
+                         "an unprefixed robot frame: the fleets' frames would collide")
 
 
 if __name__ == "__main__":
