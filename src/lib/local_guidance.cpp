@@ -30,6 +30,7 @@ LocalGuidance::LocalGuidance(const Grid& grid, int num_agents, LocalGuidanceConf
       slots_(config.window + 1),
       path_(num_agents),
       start_(num_agents, 0),
+      planned_at_(num_agents, 0),
       goal_(num_agents, kNoCell),
       occ_(static_cast<size_t>(slots_) * grid.num_cells(), Occupancy{0, {0, 0, 0, 0}}),
       rng_(config.seed) {
@@ -159,6 +160,48 @@ bool LocalGuidance::still_optimal(const WorldView& world, int i, std::minstd_ran
   return true;
 }
 
+// A shortest path from the agent's cell that meets nobody, walked greedily (a step closer to
+// the goal every step, random among equal steps), replaces the agent's path: no search finds a
+// cheaper one. Returns false, and leaves the path as it was, when the walk is blocked.
+bool LocalGuidance::probe_free_path(const WorldView& world, int i, std::minstd_rand& rng, Search& search) {
+  const Cell from = world.positions[i];
+  const Cell goal = world.goals[i].empty() ? from : world.goals[i][0];
+  if (from == goal) return false;
+  const auto row_ptr = world.dist.row(goal);
+  const DistRow& row = *row_ptr;
+  enroll(i, -1);
+  auto& q = search.walk;
+  q.assign(1, from);
+  while (q.back() != goal && static_cast<int>(q.size()) < cfg_.window + 1) {
+    const Cell last = q.back();
+    const int t_last = world.timestep + static_cast<int>(q.size()) - 1;
+    Cell options[4];
+    int m = 0;
+    for (Cell u : grid_.neighbours(last))
+      if (row[u] == row[last] - 1 && at(u, slot(t_last + 1)) == 0 && leaving(u, slot(t_last), dir(u, last)) == 0)
+        options[m++] = u;
+    if (m == 0) {
+      enroll(i, +1);
+      return false;
+    }
+    q.push_back(options[m == 1 ? 0 : rng() % m]);
+  }
+  path_[i].swap(q);
+  start_[i] = planned_at_[i] = world.timestep;
+  goal_[i] = goal;
+  enroll(i, +1);
+  return true;
+}
+
+// Whether agent i keeps its path this step, or gets a free shortest one without a search (see
+// lazy, keep_optimal and refresh).
+bool LocalGuidance::keeps(const WorldView& world, int i, std::minstd_rand& rng, Search& search) {
+  if (!cfg_.lazy) return cfg_.keep_optimal && still_optimal(world, i, rng);
+  if (!cfg_.keep_optimal) return is_valid(world, i);
+  if (still_optimal(world, i, rng) || probe_free_path(world, i, rng, search)) return true;
+  return is_valid(world, i) && (cfg_.refresh <= 0 || world.timestep - planned_at_[i] < cfg_.refresh);
+}
+
 void LocalGuidance::update(const WorldView& world, const std::vector<int>& agents,
                            std::chrono::steady_clock::time_point deadline) {
   const int now = world.timestep;
@@ -177,7 +220,7 @@ void LocalGuidance::update_in_order(const WorldView& world, const std::vector<in
   const bool timed = deadline != std::chrono::steady_clock::time_point::max();
   for (size_t k = 0; k < agents.size(); ++k) {
     const int i = agents[k];
-    if (cfg_.lazy ? is_valid(world, i) : (cfg_.keep_optimal && still_optimal(world, i, rng))) {
+    if (keeps(world, i, rng, search)) {
       ++counts.kept;
       continue;
     }
@@ -247,6 +290,7 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
   const Cell goal = world.goals[i].empty() ? at : world.goals[i][0];
   goal_[i] = goal;
   start_[i] = world.timestep;
+  planned_at_[i] = world.timestep;
   auto& out = path_[i];
   const int W = cfg_.window;
   if (at == goal) {  // rest on the goal

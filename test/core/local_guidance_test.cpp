@@ -234,6 +234,49 @@ TEST(GdRhcrProduct, BandedGuidanceIdenticalAcrossThreadCounts) {
   }
 }
 
+TEST(LocalGuidance, LazyPathsAreRefreshedAndReplacedByAFreeShortestPath) {
+  // Three agents stand across the agent's shortest way for the whole window, so its path
+  // detours (a collision costs more than the detour). Lazy with keep_optimal and refresh 2: the
+  // detour is kept for one step, searched again at two steps old, and once the way is clear a
+  // free shortest path replaces it without a search.
+  Grid g = Grid::load(repo("maps/empty-48-48.map"));
+  DistTable dist(g);
+  LocalGuidanceConfig cfg;
+  cfg.lazy = true;
+  cfg.keep_optimal = true;
+  cfg.refresh = 2;
+  cfg.collision_cost = 100;
+  LocalGuidance lg(g, 4, cfg);
+  std::vector<Cell> pos = {g.cell(0, 0), g.cell(5, 0), g.cell(5, 1), g.cell(5, 2)};
+  const Cell goal = g.cell(10, 0);
+  std::vector<std::vector<Cell>> goals = {{goal}, {pos[1]}, {pos[2]}, {pos[3]}};
+  auto step = [&](int t, bool blocked) {
+    for (int j = 1; j <= 3; ++j)
+      if (blocked) lg.set_path(j, t, std::vector<Cell>(cfg.window + 1, pos[j]));
+      else lg.clear(j);
+    WorldView w{g, dist, t, pos, goals};
+    lg.update(w, {0});
+    return lg.path_from(0, t);
+  };
+  auto path = step(0, true);
+  EXPECT_EQ(lg.searches(), 1);
+  EXPECT_GT(static_cast<int>(path.size()) - 1, dist.get(goal, pos[0]));  // a detour
+  pos[0] = path[1];
+  path = step(1, true);
+  EXPECT_EQ(lg.searches(), 1);  // kept: one step old
+  pos[0] = path[1];
+  path = step(2, true);
+  EXPECT_EQ(lg.searches(), 2);  // two steps old: searched again
+  pos[0] = path[1];
+  path = step(3, false);
+  EXPECT_EQ(lg.searches(), 2);  // the way is clear: a shortest path without a search
+  ASSERT_FALSE(path.empty());
+  EXPECT_EQ(path[0], pos[0]);
+  EXPECT_EQ(path.back(), goal);
+  EXPECT_TRUE(is_walk(g, path));
+  EXPECT_EQ(static_cast<int>(path.size()) - 1, dist.get(goal, pos[0]));
+}
+
 TEST(LocalGuidance, BandedUpdateKeepsApartAgentsApartAndRejectsOnePhase) {
   // Bands of one phase are 2W cells apart or more: a search there cannot reach another's cells.
   Grid g = Grid::load(repo("maps/empty-48-48.map"));

@@ -47,6 +47,9 @@ struct LocalGuidanceConfig {
   uint64_t seed = 1;             // random order of neighbours in the search
   int recheck = 20;              // a kept path is replanned if it meets another path within this many steps
   int phases = 0;                // 0: one sequential pass; P >= 2: banded parallel update (above)
+  // With lazy = true and keep_optimal = true: a provably optimal path is kept and extended
+  // first; any other kept path is replanned once it is `refresh` steps old (0 = never).
+  int refresh = 0;
 };
 
 class LocalGuidance {
@@ -106,11 +109,14 @@ class LocalGuidance {
     uint32_t stamp = 0;
     std::vector<Node> nodes;
     std::vector<OpenEntry> open;
+    std::vector<Cell> walk;  // probe_free_path's walk
   };
   struct Parallel;
   void drop_past(int i, int now);
   void enroll(int i, int sign);
   bool is_valid(const WorldView& world, int i) const;
+  bool keeps(const WorldView& world, int i, std::minstd_rand& rng, Search& search);
+  bool probe_free_path(const WorldView& world, int i, std::minstd_rand& rng, Search& search);
   bool still_optimal(const WorldView& world, int i, std::minstd_rand& rng);
   void update_in_order(const WorldView& world, const std::vector<int>& agents,
                        std::chrono::steady_clock::time_point deadline, Search& search,
@@ -127,6 +133,7 @@ class LocalGuidance {
   int slots_;
   std::vector<std::vector<Cell>> path_;  // per agent: cells at start_[i], start_[i]+1, ...
   std::vector<int> start_;
+  std::vector<int> planned_at_;          // the timestep each guidance path was searched
   std::vector<Cell> goal_;               // the goal each path was planned for
   // Per (cell, time slot), the slots of one cell side by side (a step's look-ups at t and t+1
   // share a cache line): paths at the cell, and per direction paths leaving it.
