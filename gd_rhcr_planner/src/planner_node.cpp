@@ -103,7 +103,11 @@ class PlannerNode {
   void apply_reconfigure_locked(std::unique_ptr<DeadlinePlanner>& retired);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);
   gdrhcr::Params planner_params_for(const gd_rhcr_planner::PlannerConfig& c) const;
-  static std::string planner_config_string(const gd_rhcr_planner::PlannerConfig& c);
+  std::string planner_config_string(const gd_rhcr_planner::PlannerConfig& c) const;
+  // GD-RHCR's step budget (--step-budget) follows the plan deadline unless set explicitly.
+  bool auto_step_budget_ = false;
+  static constexpr double kStepBudgetShare = 0.9;  // of the plan deadline
+  static std::string step_budget_string(double plan_deadline);
 
   // With mutex_ held.
   void publish_events_locked();
@@ -238,6 +242,11 @@ void PlannerNode::load_parameters() {
       if (c != "solver" && c != "solver2") base_params_.set(it->first, xmlrpc_to_string(it->second));
     }
   }
+  // GD-RHCR returns within 90% of the plan deadline (issue 12's step budget: groups it cannot
+  // solve in time are moved by its secondary solver, counted as budget_skips), so the node's
+  // PIBT moves the whole fleet only when even that is late. An explicit step_budget wins.
+  auto_step_budget_ = planner_name_ == "gd-rhcr" && !planner_params_.has("step-budget");
+  if (auto_step_budget_) planner_params_.set("step-budget", step_budget_string(plan_deadline_));
   // The live values (dynamic_reconfigure starts from the same parameters).
   live_config_ = gd_rhcr_planner::PlannerConfig::__getDefault__();
   pnh_.getParam("V", live_config_.V);
@@ -900,10 +909,19 @@ bool PlannerNode::on_emergency_stop(gd_rhcr_msgs::EmergencyStop::Request& req,
   return true;
 }
 
-std::string PlannerNode::planner_config_string(const gd_rhcr_planner::PlannerConfig& c) {
+std::string PlannerNode::planner_config_string(const gd_rhcr_planner::PlannerConfig& c) const {
   std::ostringstream o;
   o << "V=" << c.V << " H=" << c.H << " c_soft=" << c.c_soft << " K_threshold=" << c.K_threshold
     << " solver=" << c.solver << " solver2=" << c.solver2;
+  if (auto_step_budget_) o << " step_budget=" << step_budget_string(c.plan_deadline);
+  return o.str();
+}
+
+// The step budget for a plan deadline, in seconds, as a parameter string.
+std::string PlannerNode::step_budget_string(double plan_deadline) {
+  std::ostringstream o;
+  o.precision(6);
+  o << kStepBudgetShare * plan_deadline;
   return o.str();
 }
 
@@ -918,6 +936,7 @@ gdrhcr::Params PlannerNode::planner_params_for(const gd_rhcr_planner::PlannerCon
   if (c.K_threshold > 0) p.set("K_threshold", std::to_string(c.K_threshold));
   p.set("solver", c.solver);
   p.set("solver2", c.solver2);
+  if (auto_step_budget_) p.set("step-budget", step_budget_string(c.plan_deadline));
   return p;
 }
 

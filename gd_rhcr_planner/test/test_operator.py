@@ -146,6 +146,8 @@ class Operator(unittest.TestCase):
         st = self.w.get("stats")
         self.assertEqual(st.dispatcher, "batch")
         self.assertIn("V=2", st.planner_config)
+        # GD-RHCR's step budget follows the plan deadline (0.7 x the 0.2 s tick): 90% of it.
+        self.assertIn("step_budget=0.126", st.planner_config)
         self.assertEqual(st.planner, "gd-rhcr")
         self.assertGreater(st.solver_calls + st.cache_reuses + st.threshold_fallbacks, 0, "GD-RHCR counters as fields")
         self.assertGreaterEqual(st.dispatch_robots, 0)
@@ -187,11 +189,15 @@ class Operator(unittest.TestCase):
         m = re.search(r"'plan_deadline': ([0-9.eE+-]+)", got.stdout)
         self.assertIsNotNone(m, got.stdout)
         self.assertLessEqual(float(m.group(1)), 0.2, "a deadline past the tick period was accepted")
+        # A valid deadline: the planner is rebuilt with the step budget that follows it.
+        r = dynparam("set", NODE, "plan_deadline", "0.1")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.w.wait(lambda w: "step_budget=0.09" in w.stats.planner_config, 15, "step budget follows the deadline")
         # The fleet keeps working with no task lost.
         self.w.wait(lambda w: w.stats.tasks_delivered >= delivered + 2, 60, "deliveries after reconfigure")
         self.assert_no_task_lost(before)
         self.assertEqual(self.w.get("failed"), [])
-        dynparam("set", NODE, "{'V': 2, 'H': 20, 'c_soft': 1.0}")
+        dynparam("set", NODE, "{'V': 2, 'H': 20, 'c_soft': 1.0, 'plan_deadline': 0.14}")
 
     def test_4_pause_one_robot(self):
         res = self.pause(robot_id=99, paused=True)
