@@ -7,6 +7,7 @@
 // so ideas can be tried here before the ROS benchmark (scripts/bench_delays.sh).
 //   delay_benchmark --map maps/warehouse-10-20-10-2-1.map --robots 300 --ticks 300 --p-delay 0.01
 //       --max-delay 20 --planner gd-rhcr --execution adg --speed 6 --seeds 1 --commit-horizon 1
+//       [--param key=value ...]   (planner parameters, e.g. --param guidance=none)
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -26,6 +27,7 @@ struct Options {
   std::string map = "maps/warehouse-10-20-10-2-1.map", planner = "gd-rhcr", execution = "adg";
   int robots = 300, ticks = 300, max_delay = 20, speed = 6, seeds = 1, commit_horizon = 1;
   double p_delay = 0.01;
+  std::vector<std::pair<std::string, std::string>> params;  // --param key=value, for the planner
 };
 
 struct Result {
@@ -39,6 +41,7 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
   gdrhcr::Params params, none;
   // Node-budget mode: the same plans on any machine (no timeouts).
   if (o.planner == "gd-rhcr") params.set("timeout", "1e6"), params.set("node-budget", "2000");
+  for (const auto& [k, v] : o.params) params.set(k, v);
   DeadlinePlanner planner(gdrhcr::make_planner(o.planner, params, g, o.robots, seed),
                           gdrhcr::make_planner("pibt", none, g, o.robots, seed));
   ExecutorConfig cfg;
@@ -81,11 +84,13 @@ int main(int argc, char** argv) {
     else if (k == "--speed") o.speed = std::atoi(v.c_str());
     else if (k == "--seeds") o.seeds = std::atoi(v.c_str());
     else if (k == "--commit-horizon") o.commit_horizon = std::atoi(v.c_str());
+    else if (k == "--param" && v.find('=') != std::string::npos)
+      o.params.emplace_back(v.substr(0, v.find('=')), v.substr(v.find('=') + 1));
     else if (k == "--p-delay") o.p_delay = std::atof(v.c_str());
     else {
       std::fprintf(stderr,
                    "unknown option %s (--map --planner --execution --robots --ticks --p-delay --max-delay --speed "
-                   "--seeds --commit-horizon)\n",
+                   "--seeds --commit-horizon --param key=value)\n",
                    k.c_str());
       return 2;
     }
