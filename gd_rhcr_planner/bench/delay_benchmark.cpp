@@ -42,8 +42,9 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
   // Node-budget mode: the same plans on any machine (no timeouts).
   if (o.planner == "gd-rhcr") params.set("timeout", "1e6"), params.set("node-budget", "2000");
   for (const auto& [k, v] : o.params) params.set(k, v);
-  DeadlinePlanner planner(gdrhcr::make_planner(o.planner, params, g, o.robots, seed),
-                          gdrhcr::make_planner("pibt", none, g, o.robots, seed));
+  auto primary = gdrhcr::make_planner(o.planner, params, g, o.robots, seed);
+  params.check_all_used(o.planner);  // a misspelt --param is an error, not ignored
+  DeadlinePlanner planner(std::move(primary), gdrhcr::make_planner("pibt", none, g, o.robots, seed));
   ExecutorConfig cfg;
   cfg.mode = parse_execution_mode(o.execution);
   cfg.commit_horizon = o.commit_horizon;
