@@ -47,8 +47,9 @@ struct LocalGuidanceConfig {
   uint64_t seed = 1;             // random order of neighbours in the search
   int recheck = 20;              // a kept path is replanned if it meets another path within this many steps
   int phases = 0;                // 0: one sequential pass; P >= 2: banded parallel update (above)
-  // With lazy = true and keep_optimal = true: a provably optimal path is kept and extended
-  // first; any other kept path is replanned once it is `refresh` steps old (0 = never).
+  // With lazy = true and keep_optimal = true: a provably optimal path is kept and extended; else
+  // a free shortest path, if a greedy walk finds one, replaces the path without a search; else a
+  // lazily valid path is kept until it is `refresh` steps old (0 = as long as it is valid).
   int refresh = 0;
 };
 
