@@ -19,7 +19,6 @@ namespace gdrhcr {
 
 using Clock = std::chrono::steady_clock;
 
-
 const char* to_string(GroupAction a) {
   switch (a) {
     case GroupAction::Reused: return "reused";
@@ -384,7 +383,7 @@ bool GdRhcrPlanner::repair_step(const WorldView& world, std::vector<Cell>& next,
         if (k >= 0 && k != j && in_set[k]) add_group(j), grew = true;
       }
     }
-    if (any && last_round > 0 && agents.size() <= last_round)
+    if (last_round > 0 && agents.size() <= last_round)
       throw std::runtime_error("gd-rhcr: no collision-free step: " + v->describe(grid_, world.timestep) +
                                " persists with every agent involved re-moved (do two agents start in one cell?)");
     last_round = agents.size();
