@@ -8,6 +8,8 @@
 //   delay_benchmark --map maps/warehouse-10-20-10-2-1.map --robots 300 --ticks 300 --p-delay 0.01
 //       --max-delay 20 --planner gd-rhcr --execution adg --speed 6 --seeds 1 --commit-horizon 1
 //       [--param key=value ...]   (planner parameters, e.g. --param guidance=none)
+// Each robot's goals come from its own random stream, so both runs of a seed give every robot
+// the same goal sequence. DELAY_BENCH_STATS=1 prints the planner's counters after each run.
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -32,7 +34,7 @@ struct Options {
 
 struct Result {
   int goals = 0;
-  double delayed = 0, waiting = 0;  // per tick
+  double delayed = 0, waiting = 0, held = 0, moves = 0;  // per tick
   std::string error;
 };
 
@@ -64,9 +66,15 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
     }
     r.delayed += fleet.delayed();
     r.waiting += out.waiting;
+    r.held += out.held;
   }
+  for (const SimRobot& s : fleet.robots()) r.moves += s.moves;
+  planner.wait_idle();
+  if (std::getenv("DELAY_BENCH_STATS")) std::fprintf(stderr, "p %.3f: %s\n", p_delay, planner.primary().stats().dump().c_str());
   r.delayed /= o.ticks;
   r.waiting /= o.ticks;
+  r.held /= o.ticks;
+  r.moves /= o.ticks;
   return r;
 }
 
@@ -109,8 +117,8 @@ int main(int argc, char** argv) {
                 "delays p %.3f per tick of 1..%d ticks, random goals\n",
                 o.map.c_str(), o.robots, o.planner.c_str(), o.execution.c_str(), o.commit_horizon, o.ticks,
                 o.speed / double(SimRobot::kSub), o.p_delay, o.max_delay);
-    std::printf("%5s %14s %14s %7s %16s %16s\n", "seed", "goals/tick no", "goals/tick p", "ratio",
-                "delayed robots", "waiting robots");
+    std::printf("%5s %14s %14s %7s %16s %16s %12s %14s\n", "seed", "goals/tick no", "goals/tick p", "ratio",
+                "delayed robots", "waiting no / p", "held moves", "moves no / p");
     double sum_ratio = 0;
     for (int s = 1; s <= o.seeds; ++s) {
       const Result a = run(map.grid, o, 0.0, s), b = run(map.grid, o, o.p_delay, s);
@@ -121,7 +129,8 @@ int main(int argc, char** argv) {
         }
       const double ta = double(a.goals) / o.ticks, tb = double(b.goals) / o.ticks;
       sum_ratio += tb / ta;
-      std::printf("%5d %14.3f %14.3f %6.1f%% %16.1f %16.1f\n", s, ta, tb, 100 * tb / ta, b.delayed, b.waiting);
+      std::printf("%5d %14.3f %14.3f %6.1f%% %16.1f %7.1f / %6.1f %5.1f / %4.1f %6.0f / %5.0f\n", s, ta, tb, 100 * tb / ta,
+                  b.delayed, a.waiting, b.waiting, a.held, b.held, a.moves, b.moves);
       std::fflush(stdout);
     }
     std::printf("mean ratio %.1f%%\n", 100 * sum_ratio / o.seeds);

@@ -14,6 +14,8 @@ struct DeadlinePlanner::Job {
   std::vector<std::vector<gdrhcr::Cell>> goals;
   std::vector<uint8_t> immovable;
   bool has_immovable = false;
+  std::vector<gdrhcr::Cell> blocked;
+  bool has_blocked = false;
   std::shared_ptr<const void> keep_alive;
   std::vector<gdrhcr::Cell> next;
   gdrhcr::StepReport report;
@@ -46,6 +48,7 @@ void DeadlinePlanner::worker_loop() {
       lock.unlock();
       gdrhcr::WorldView world{*job->grid, *job->dist, job->timestep, job->positions, job->goals};
       if (job->has_immovable) world.immovable = &job->immovable;
+      if (job->has_blocked) world.blocked = &job->blocked;
       try {
         job->report = primary_->plan_step(world, job->next);
       } catch (const std::exception& e) {
@@ -85,6 +88,7 @@ DeadlineOutcome DeadlinePlanner::step(const gdrhcr::WorldView& world, std::vecto
       job->positions = world.positions;
       job->goals = world.goals;
       if (world.immovable) job->immovable = *world.immovable, job->has_immovable = true;
+      if (world.blocked) job->blocked = *world.blocked, job->has_blocked = true;
       job->keep_alive = std::move(keep_alive);
       job->next = next;
       job_ = job;

@@ -10,20 +10,26 @@ using gdrhcr::Cell;
 using gdrhcr::kNoCell;
 
 DelayedFleet::DelayedFleet(const gdrhcr::Grid& g, int n, uint64_t seed, int min_speed, int max_speed)
-    : g_(g), rng_(seed), robots_(n) {
+    : g_(g), rng_(seed), delay_rng_(seed * 0x9E3779B97F4A7C15ULL + 1), robots_(n) {
+  // Each robot draws its goals from its own stream, so a run with delays gets the same goal
+  // sequence per robot as one without (paired runs: the ratio is not drowned in task noise).
+  for (int i = 0; i < n; ++i) {
+    std::seed_seq seq{seed, uint64_t(i), uint64_t(0x60a15)};
+    goal_rng_.emplace_back(seq);
+  }
   std::vector<Cell> free = g.free_cells();
   std::shuffle(free.begin(), free.end(), rng_);
   std::uniform_int_distribution<int> speed(min_speed, max_speed);
   for (int i = 0; i < n; ++i) {
     robots_[i].cell = free[i];
     robots_[i].speed = speed(rng_);
-    robots_[i].goal = random_cell();
+    robots_[i].goal = random_cell(i);
   }
 }
 
-Cell DelayedFleet::random_cell() {
+Cell DelayedFleet::random_cell(size_t robot) {
   const auto& f = g_.free_cells();
-  return f[std::uniform_int_distribution<size_t>(0, f.size() - 1)(rng_)];
+  return f[std::uniform_int_distribution<size_t>(0, f.size() - 1)(goal_rng_[robot])];
 }
 
 std::vector<RobotRecord> DelayedFleet::records() const {
@@ -48,11 +54,11 @@ std::vector<std::vector<Cell>> DelayedFleet::goals(int& reached) {
     if (!s.missing && (s.silent || s.offline)) dead[s.cell] = 1, dead[s.moving ? s.dst : s.cell] = 1;
   for (size_t i = 0; i < robots_.size(); ++i) {
     SimRobot& s = robots_[i];
-    while (dead.count(s.goal)) s.goal = random_cell();
+    while (dead.count(s.goal)) s.goal = random_cell(i);
     if (!s.moving && s.cell == s.goal && !s.missing && !s.silent && !s.offline) {
       ++reached;
       ++s.goals_reached;
-      s.goal = random_cell();
+      s.goal = random_cell(i);
     }
     out[i] = {s.offline || s.silent ? s.cell : s.goal};
   }
@@ -65,7 +71,7 @@ std::string DelayedFleet::execute(const TickOutput& out, double p_delay, int max
   for (size_t i = 0; i < robots_.size(); ++i) {
     SimRobot& s = robots_[i];
     if (s.missing || s.silent) continue;
-    if (s.delay == 0 && p_delay > 0 && u(rng_) < p_delay) s.delay = d(rng_) * SimRobot::kSub;
+    if (s.delay == 0 && p_delay > 0 && u(delay_rng_) < p_delay) s.delay = d(delay_rng_) * SimRobot::kSub;
     const Cell c = out.command[i];
     if (c == kNoCell) continue;
     if (s.moving) {

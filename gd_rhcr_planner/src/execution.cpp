@@ -298,10 +298,13 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, Dead
       // this step; the others plan around its end state, so no commitments pile up behind a
       // late robot.
       immovable[a] = static_cast<int>(t.path.size()) >= cfg_.commit_horizon || holds(r);
-      // Late (commanded in an earlier tick, not arrived): it still fills the cell it leaves, so
-      // nobody is committed into that cell behind it now (they would only queue there).
-      // (Kept out of the distance table, which would be rebuilt on every change.)
-      if (t.dispatched && t.dispatched_at < ticks_) late_cells.push_back(t.cell);
+      // Cells the planner must keep everybody out of in this step, as no robot there will leave
+      // it soon: a late robot's (commanded in an earlier tick, not arrived) still fills the
+      // cell it leaves, and a robot waiting for its committed move fills its cell until its
+      // move is dispatched and made. Behind such a robot others would only queue: the planner
+      // routes them around (WorldView::blocked), and the hold cascade below still holds any
+      // move into them.
+      if ((t.dispatched && t.dispatched_at < ticks_) || (!t.dispatched && !t.path.empty())) late_cells.push_back(t.cell);
       agent_goals[a] = holds(r) ? std::vector<Cell>{end} : planner_goals(r, goals[r], end);
     } else {
       // Lock-step: a robot still moving is held, and the cell it enters is reserved (issue 13).
@@ -322,6 +325,16 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, Dead
   gdrhcr::WorldView world{grid_, dist, static_cast<int>(steps_), positions, agent_goals};
   bool any_immovable = std::any_of(immovable.begin(), immovable.end(), [](uint8_t v) { return v != 0; });
   if (any_immovable) world.immovable = &immovable;
+  // Blocked for the planner: the late and waiting robots' cells no planned agent stands on (a
+  // robot committed behind a late one has its end state in the late robot's cell).
+  std::vector<uint8_t> is_position(grid_.num_cells(), 0);
+  for (Cell c : positions) is_position[c] = 1;
+  std::vector<Cell> planner_blocked;
+  for (Cell c : late_cells)
+    if (!is_position[c]) planner_blocked.push_back(c);
+  std::sort(planner_blocked.begin(), planner_blocked.end());
+  planner_blocked.erase(std::unique(planner_blocked.begin(), planner_blocked.end()), planner_blocked.end());
+  if (!planner_blocked.empty()) world.blocked = &planner_blocked;
   std::vector<Cell> next = positions;
   out.outcome = planner.step(world, next, cfg_.plan_deadline_s, obstacle_dist_);
   out.planner_called = true;

@@ -39,6 +39,7 @@ struct GdRhcrPlanner::Plan {
   int valid_steps = 0;
   std::vector<std::vector<Cell>> paths;
   std::vector<std::vector<Cell>> goals;  // the goal sequence each agent was planned with
+  std::vector<uint8_t> held;             // per agent: immovable when planned (its path just stays)
 };
 
 // A group replanned by the primary solver this step.
@@ -153,9 +154,11 @@ bool GdRhcrPlanner::needs_replan(const WorldView& world, const std::vector<int>&
     const auto& path = p->paths[slot_of_[i]];
     if (k + 1 >= static_cast<int>(path.size()) || path[k] != world.positions[i]) return true;
     if (world.is_immovable(i) && path[k + 1] != path[k]) return true;  // went offline since
-    if (world.immovable)  // the plan runs into a robot that went offline since
+    // Free again (a late robot arrived, an offline one came back): its plan only kept it in place.
+    if (!p->held.empty() && p->held[slot_of_[i]] && !world.is_immovable(i)) return true;
+    if (!taken_at_.empty())  // the plan runs into a robot that went offline or a cell blocked since
       for (size_t s = k + 1; s < path.size(); ++s)
-        if (immovable_at_[path[s]] && path[s] != world.positions[i]) return true;
+        if (taken_at_[path[s]] && path[s] != world.positions[i]) return true;
     const Cell goal = world.goals[i].empty() ? kNoCell : world.goals[i][0];
     const auto& planned_goals = p->goals[slot_of_[i]];
     if (goal != kNoCell && std::find(planned_goals.begin(), planned_goals.end(), goal) == planned_goals.end())
@@ -273,7 +276,7 @@ void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
   pc.c_soft = cfg_.c_soft;
   pc.time_limit_s = cfg_.timeout_s;
   pc.node_budget = cfg_.node_budget;
-  pc.blocked_cells = immovable_cells_.empty() ? nullptr : &immovable_cells_;
+  pc.blocked_cells = taken_cells_.empty() ? nullptr : &taken_cells_;
   if (job.deadline != Clock::time_point::max()) {  // the step budget: give up if nothing is left
     const double left = std::chrono::duration<double>(job.deadline - Clock::now()).count();
     if (left <= 0) {
@@ -408,8 +411,8 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
                        ? step_start + std::chrono::duration_cast<Clock::duration>(
                                           std::chrono::duration<double>(0.9 * cfg_.step_budget_s))
                        : Clock::time_point::max();
-  immovable_cells_ = world.immovable_cells();
-  immovable_at_ = world.immovable_cell_mask();
+  taken_cells_ = world.taken_cells();
+  taken_at_ = world.taken_cell_mask();
   const auto& groups = partition_.groups();
 
   last_groups_.assign(groups.size(), GroupInfo{});
@@ -485,6 +488,7 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
     for (size_t s = 0; s < job.agents->size(); ++s) {
       const int i = (*job.agents)[s];
       plan->goals.push_back(world.goals[i]);
+      plan->held.push_back(world.is_immovable(i));
       plan_of_[i] = plan;
       slot_of_[i] = static_cast<int>(s);
       if (guidance_) guidance_->set_path(i, t, plan->paths[s]);  // guidance searches avoid it

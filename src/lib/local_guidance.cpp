@@ -206,11 +206,22 @@ void LocalGuidance::update(const WorldView& world, const std::vector<int>& agent
                            std::chrono::steady_clock::time_point deadline) {
   const int now = world.timestep;
   for (size_t i = 0; i < path_.size(); ++i) drop_past(static_cast<int>(i), now);
+  mark_blocked(world, +1);
   if (parallel_) {
     update_banded(world, agents, deadline);
   } else {
     update_in_order(world, agents, deadline, search_, rng_, counts_);
   }
+  mark_blocked(world, -1);
+}
+
+// Blocked cells (a late robot still leaving them) count as taken in the searches of this update,
+// from now on for `blocked_steps` steps (how long such a cell is expected to stay taken).
+void LocalGuidance::mark_blocked(const WorldView& world, int sign) {
+  if (!world.blocked) return;
+  const int steps = std::min(cfg_.blocked_steps < 0 ? cfg_.window : cfg_.blocked_steps, cfg_.window);
+  for (Cell c : *world.blocked)
+    for (int k = 0; k <= steps; ++k) at(c, slot(world.timestep + k)) += sign;
 }
 
 // The sequential update of `agents`, in order (also one band of the parallel update).

@@ -81,6 +81,8 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
     if (from != kNoCell) occupied_next_[from] = kFixed;
     if (to != kNoCell) occupied_next_[to] = kFixed;
   }
+  if (world.blocked)  // blocked cells (a late robot still leaving them): nobody enters
+    for (Cell c : *world.blocked) occupied_next_[c] = kFixed;
   std::stable_sort(order_.begin(), order_.end(),
                    [&](int a, int b) { return priority_[a] > priority_[b]; });
   for (int i : order_)
@@ -94,6 +96,8 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
     if (from != kNoCell) occupied_next_[from] = kFree;
     if (to != kNoCell) occupied_next_[to] = kFree;
   }
+  if (world.blocked)
+    for (Cell c : *world.blocked) occupied_next_[c] = kFree;
   preferred_ = nullptr;
   immovable_ = nullptr;
 }

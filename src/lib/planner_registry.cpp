@@ -44,6 +44,7 @@ LocalGuidanceConfig guidance_config(Params& p, int num_agents) {
   c.keep_optimal = p.get_int("lg-keep-optimal", c.keep_optimal ? 1 : 0, 0, 1) == 1;
   c.max_expansions = p.get_int("lg-expansions", c.max_expansions, 1, 1 << 30);
   c.refresh = p.get_int("lg-refresh", c.refresh, 0, 1 << 20);
+  c.blocked_steps = p.get_int("lg-blocked-steps", c.blocked_steps, -1, 1000);
   c.phases = p.get_int("lg-phases", num_agents > kLazyGuidanceAgents ? 2 : 0, 0, 1000);
   if (c.phases == 1) throw ParamError("parameter lg-phases must be 0 (sequential) or >= 2");
   return c;

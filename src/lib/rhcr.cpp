@@ -17,7 +17,7 @@ RhcrPlanner::RhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, RhcrCo
 
 bool RhcrPlanner::on_plan(const WorldView& world) const {
   const int k = world.timestep - plan_start_;
-  const std::vector<uint8_t> immovable_at = world.immovable_cell_mask();
+  const std::vector<uint8_t> immovable_at = world.taken_cell_mask();
   for (int i = 0; i < world.num_agents(); ++i) {
     const auto& p = plan_[i];
     if (!immovable_at.empty() && !world.is_immovable(i))
@@ -45,7 +45,7 @@ StepReport RhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& nex
     plan_start_ = world.timestep;
     // An agent without a known goal just keeps its cell (a one-goal sequence it already meets).
     // Immovable agents are not planned: their cells are blocked for everyone else.
-    const std::vector<Cell> blocked = world.immovable_cells();
+    const std::vector<Cell> blocked = world.taken_cells();
     std::vector<int> movable;
     std::vector<Cell> starts;
     std::vector<std::vector<Cell>> goals;

@@ -54,11 +54,12 @@ class DelayedFleet {
   gdrhcr::Cell collision_cell = gdrhcr::kNoCell;
 
  private:
-  gdrhcr::Cell random_cell();
+  gdrhcr::Cell random_cell(size_t robot);
   std::string check_physical();
 
   const gdrhcr::Grid& g_;
-  std::mt19937_64 rng_;
+  std::mt19937_64 rng_, delay_rng_;     // placement and speeds; delays
+  std::vector<std::mt19937_64> goal_rng_;  // per robot: its goals
   std::vector<SimRobot> robots_;
 };
 

@@ -117,15 +117,15 @@ class GdRhcrPlanner : public Planner {
   long next_plan_id_ = 1;
   int now_ = 0;  // the timestep of the last plan_step
   std::vector<GroupInfo> last_groups_;
-  // This step's immovable agents: their cells (blocked for every primary solve) and, per
-  // cell, whether one stands there. Written before the parallel phase, read during it.
   static constexpr int kBlock = 8;  // spatial index: agents per kBlock x kBlock cells
   std::vector<std::vector<int>> block_agents_;
   int blocks_w_ = 0;
   std::chrono::steady_clock::time_point step_deadline_ = std::chrono::steady_clock::time_point::max();
   std::vector<int> free_sum_, agent_sum_;  // 2-D prefix sums (W+1)x(H+1) of free cells, agents
-  std::vector<Cell> immovable_cells_;
-  std::vector<uint8_t> immovable_at_;
+  // This step's taken cells (immovable agents' and WorldView::blocked): blocked for every primary
+  // solve, and the same per cell. Written before the parallel phase, read during it.
+  std::vector<Cell> taken_cells_;
+  std::vector<uint8_t> taken_at_;
   struct Arena;
   std::unique_ptr<Arena> arena_;
 

@@ -12,6 +12,10 @@
 // The collision table counts, per (time mod (W+1), cell), the guidance paths there and, per
 // direction, those leaving the cell, so adding, removing and querying a path is O(W).
 //
+// Cells the world blocks for a while (WorldView::blocked: a late robot still leaving them)
+// count as taken in every search for `blocked_steps` steps, so guidance goes around them when a
+// detour is cheaper than the wait.
+//
 // Parallel update (fleets of thousands, issue 12): with `phases` P >= 2 the map is cut into
 // bands across its longer side, each ceil(2W / (P - 1)) cells wide, and band b is updated in
 // phase b mod P. After stale paths are dropped every path starts at its agent's cell, so a
@@ -51,6 +55,8 @@ struct LocalGuidanceConfig {
   // a free shortest path, if a greedy walk finds one, replaces the path without a search; else a
   // lazily valid path is kept until it is `refresh` steps old (0 = as long as it is valid).
   int refresh = 0;
+  // WorldView::blocked cells count as taken for this many steps from now (-1: the window).
+  int blocked_steps = -1;
 };
 
 class LocalGuidance {
@@ -114,6 +120,7 @@ class LocalGuidance {
   };
   struct Parallel;
   void drop_past(int i, int now);
+  void mark_blocked(const WorldView& world, int sign);
   void enroll(int i, int sign);
   bool is_valid(const WorldView& world, int i) const;
   bool keeps(const WorldView& world, int i, std::minstd_rand& rng, Search& search);

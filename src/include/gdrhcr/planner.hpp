@@ -28,20 +28,26 @@ struct WorldView {
   // in place and plan around them; pair with a DistTable that blocks their cells, so distances
   // route around them too.
   const std::vector<uint8_t>* immovable = nullptr;
+  // Free cells no agent may enter in this step and that may stay taken for a while, though no
+  // agent stands on them (the cell a late robot is still leaving); null = none. Planners keep
+  // agents out of them and plan around them; no agent's position is among them.
+  const std::vector<Cell>* blocked = nullptr;
   int num_agents() const { return static_cast<int>(positions.size()); }
   bool is_immovable(int i) const { return immovable && (*immovable)[i]; }
-  // The cells of the immovable agents, and the same as a per-cell mask (empty when none).
-  std::vector<Cell> immovable_cells() const {
+  // The cells nothing may enter in this step: the immovable agents' cells and the blocked cells;
+  // and the same as a per-cell mask (empty when there are none).
+  std::vector<Cell> taken_cells() const {
     std::vector<Cell> cells;
     for (int i = 0; immovable && i < num_agents(); ++i)
       if ((*immovable)[i]) cells.push_back(positions[i]);
+    if (blocked) cells.insert(cells.end(), blocked->begin(), blocked->end());
     return cells;
   }
-  std::vector<uint8_t> immovable_cell_mask() const {
+  std::vector<uint8_t> taken_cell_mask() const {
     std::vector<uint8_t> mask;
-    if (!immovable) return mask;
+    if (!immovable && !(blocked && !blocked->empty())) return mask;
     mask.assign(grid.num_cells(), 0);
-    for (Cell c : immovable_cells()) mask[c] = 1;
+    for (Cell c : taken_cells()) mask[c] = 1;
     return mask;
   }
 };
