@@ -99,6 +99,9 @@ GdRhcrPlanner::GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, Gd
       partition_(grid),
       pibt_(grid, num_agents, seed, cfg_.pibt),
       guidance_(cfg_.guidance ? std::make_unique<LocalGuidance>(grid, num_agents, cfg_.lg) : nullptr),
+      forecast_(cfg_.guidance && cfg_.forecast.steps >= 2
+                    ? std::make_unique<MotionForecast>(grid, num_agents, cfg_.forecast, cfg_.lg)
+                    : nullptr),
       validator_(grid),
       plan_of_(num_agents),
       slot_of_(num_agents, 0),
@@ -350,6 +353,21 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
   for (int i : agents) out[i] = moves[i];
 }
 
+// The secondary agents' motion forecast for the next step's guidance; agents on multi-step
+// plans follow them in the rollout.
+void GdRhcrPlanner::roll_forecast(const WorldView& world, const std::vector<int>& secondary,
+                                  const std::vector<uint8_t>& on_secondary, const std::vector<Cell>& next) {
+  const int t = world.timestep;
+  std::vector<std::vector<Cell>> fixed(world.num_agents());
+  for (int i = 0; i < world.num_agents(); ++i) {
+    if (on_secondary[i] || !plan_of_[i]) continue;
+    const auto& path = plan_of_[i]->paths[slot_of_[i]];
+    const int k = t + 1 - plan_of_[i]->start_time;
+    if (k >= 0 && k < static_cast<int>(path.size()) && path[k] == next[i]) fixed[i].assign(path.begin() + k, path.end());
+  }
+  forecast_->roll(world, next, secondary, pibt_, *guidance_, &fixed);
+}
+
 // The final check: if the assembled step has a collision (possible only for V < 2 or with
 // stale plans), the groups involved are re-moved together by PIBT with every other move fixed;
 // groups whose fixed move enters a re-moved agent's cell join them (PIBT must be free to keep
@@ -508,6 +526,7 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
   }
   if (!secondary.empty()) {
     const auto t0 = Clock::now();
+    if (forecast_) forecast_->seed(world, secondary, *guidance_);
     run_secondary(world, secondary, next, next);
     const double dt = std::chrono::duration<double>(Clock::now() - t0).count();
     step_max_time = std::max(step_max_time, dt);  // one PIBT call covers all those groups
@@ -526,6 +545,7 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
       if (repaired[info.agents[0]]) info.action = GroupAction::Repair;
   }
   adopt_one_step_plans(world, secondary, next);
+  if (forecast_ && !secondary.empty()) roll_forecast(world, secondary, on_secondary, next);
 
   // Statistics.
   const bool solved = !jobs.empty() || !secondary.empty();
@@ -563,6 +583,8 @@ nlohmann::json GdRhcrPlanner::params() const {
           {"lg_cost", cfg_.lg.collision_cost},
           {"lg_lazy", cfg_.lg.lazy},
           {"lg_phases", cfg_.lg.phases},
+          {"lg_forecast", forecast_ ? cfg_.forecast.steps : 0},
+          {"lg_forecast_window", cfg_.forecast.window},
           {"seed", seed_}};
 }
 

@@ -91,12 +91,12 @@ void LocalGuidance::drop_past(int i, int now) {
   start_[i] = now;
 }
 
-void LocalGuidance::set_path(int i, int now, const std::vector<Cell>& path) {
+void LocalGuidance::set_path(int i, int now, const std::vector<Cell>& path, Cell goal) {
   enroll(i, -1);
   const size_t len = std::min<size_t>(path.size(), slots_);
   path_[i].assign(path.begin(), path.begin() + len);
-  start_[i] = now;
-  goal_[i] = kNoCell;  // not a guidance path: replanned whenever guidance is asked for
+  start_[i] = planned_at_[i] = now;
+  goal_[i] = goal;  // kNoCell: not a guidance path, replanned whenever guidance is asked for
   enroll(i, +1);
 }
 

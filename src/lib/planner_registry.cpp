@@ -3,6 +3,7 @@
 #include <utility>
 
 #include "gdrhcr/gd_rhcr.hpp"
+#include "gdrhcr/motion_forecast.hpp"
 #include "gdrhcr/pibt.hpp"
 #include "gdrhcr/planner.hpp"
 #include "gdrhcr/rhcr.hpp"
@@ -20,9 +21,10 @@ PibtOptions pibt_options(Params& p, bool paper) {
   PibtOptions o;
   o.priority_reset = p.get_int("priority-reset", 1, 0, 1) == 1;
   o.swap = p.get_int("swap", paper ? 0 : 1, 0, 1) == 1;
-  o.tie_break = p.get_choice("tie-break", "free-first", {"free-first", "random"}) == "random"
-                    ? PibtOptions::TieBreak::kRandom
-                    : PibtOptions::TieBreak::kFreeFirst;
+  const std::string tie = p.get_choice("tie-break", "free-first", {"free-first", "random", "hindrance"});
+  o.tie_break = tie == "random"      ? PibtOptions::TieBreak::kRandom
+                : tie == "hindrance" ? PibtOptions::TieBreak::kHindrance
+                                     : PibtOptions::TieBreak::kFreeFirst;
   return o;
 }
 
@@ -50,6 +52,16 @@ LocalGuidanceConfig guidance_config(Params& p, int num_agents) {
   return c;
 }
 
+// The motion forecast the guidance is planned around (motion_forecast.hpp): `lg-forecast` steps
+// (0 = none), rolled with a guidance of window `lg-forecast-window`.
+MotionForecastConfig forecast_config(Params& p, int default_steps) {
+  MotionForecastConfig c;
+  c.steps = p.get_int("lg-forecast", default_steps, 0, 1000);
+  if (c.steps == 1) throw ParamError("parameter lg-forecast must be 0 (none) or >= 2");
+  c.window = p.get_int("lg-forecast-window", c.window, 1, 1000);
+  return c;
+}
+
 const std::vector<std::pair<std::string, PlannerFactory>>& registry() {
   static const std::vector<std::pair<std::string, PlannerFactory>> planners = {
       {"pibt",
@@ -58,7 +70,8 @@ const std::vector<std::pair<std::string, PlannerFactory>>& registry() {
          if (p.get_choice("guidance", "none", {"none", "local"}) == "local") {
            LocalGuidanceConfig lg = guidance_config(p, n);
            lg.seed = seed;
-           return std::make_unique<PibtPlanner>(grid, n, seed, o, &lg);
+           const MotionForecastConfig forecast = forecast_config(p, 0);
+           return std::make_unique<PibtPlanner>(grid, n, seed, o, &lg, &forecast);
          }
          return std::make_unique<PibtPlanner>(grid, n, seed, o);
        }},
@@ -94,6 +107,7 @@ const std::vector<std::pair<std::string, PlannerFactory>>& registry() {
          c.guidance = p.get_choice("guidance", c.guidance ? "local" : "none", {"none", "local"}) == "local";
          c.lg = guidance_config(p, n);
          c.lg.seed = seed;
+         c.forecast = forecast_config(p, c.forecast.steps);
          return std::make_unique<GdRhcrPlanner>(grid, n, seed, c);
        }},
   };

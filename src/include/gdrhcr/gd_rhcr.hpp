@@ -23,6 +23,7 @@
 
 #include "gdrhcr/group_partition.hpp"
 #include "gdrhcr/local_guidance.hpp"
+#include "gdrhcr/motion_forecast.hpp"
 #include "gdrhcr/pibt.hpp"
 #include "gdrhcr/planner.hpp"
 #include "gdrhcr/validator.hpp"
@@ -52,6 +53,7 @@ struct GdRhcrConfig {
   PibtOptions pibt;              // the secondary solver's PIBT techniques
   bool guidance = false;         // the secondary solver follows local guidance paths
   LocalGuidanceConfig lg;        // ... with these settings
+  MotionForecastConfig forecast; // ... planned around its agents' motion forecast (steps >= 2)
 
   // The paper's exact configuration (PBS + plain PIBT, K_threshold = min(floor(0.1 k), 20)):
   // `--preset paper`, used by the paper-reproduction figures.
@@ -101,6 +103,8 @@ class GdRhcrPlanner : public Planner {
                      const std::vector<Cell>& next, std::vector<Cell>& out);
   void adopt_one_step_plans(const WorldView& world, const std::vector<int>& agents,
                             const std::vector<Cell>& next);
+  void roll_forecast(const WorldView& world, const std::vector<int>& secondary,
+                     const std::vector<uint8_t>& on_secondary, const std::vector<Cell>& next);
   bool repair_step(const WorldView& world, std::vector<Cell>& next, std::vector<uint8_t>& repaired);
   int offset_of(int agent, int t) const;
 
@@ -111,6 +115,7 @@ class GdRhcrPlanner : public Planner {
   GroupPartition partition_;
   PibtStep pibt_;
   std::unique_ptr<LocalGuidance> guidance_;  // paths of secondary agents and, as obstacles, plans
+  std::unique_ptr<MotionForecast> forecast_;  // the secondary agents' motion, for the guidance
   StepValidator validator_;  // the final check, with its per-cell scratch kept across steps
   std::vector<std::shared_ptr<const Plan>> plan_of_;  // lambda_i: the plan agent i follows
   std::vector<int> slot_of_;                          // agent i's row in that plan

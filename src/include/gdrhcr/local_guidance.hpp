@@ -70,8 +70,10 @@ class LocalGuidance {
   void update(const WorldView& world, const std::vector<int>& agents,
               std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max());
   // Sets agent i's expected path from time world.timestep on (e.g. a plan made by another
-  // solver), so guidance searches avoid it; path[0] is its cell now.
-  void set_path(int i, int now, const std::vector<Cell>& path);
+  // solver), so guidance searches avoid it; path[0] is its cell now. With `goal`, the path is
+  // taken as a guidance path planned for that goal (a lazy update may keep it); without, it is
+  // replanned whenever guidance is asked for.
+  void set_path(int i, int now, const std::vector<Cell>& path, Cell goal = kNoCell);
   // Forgets agent i's path.
   void clear(int i);
 
