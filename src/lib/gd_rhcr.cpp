@@ -347,6 +347,11 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
     std::vector<Cell> preferred(world.num_agents(), kNoCell);
     for (int i : agents) preferred[i] = guidance_->next_cell(i, world.timestep, world.positions[i]);
     pibt_.step(world, moves, agents, fixed, &preferred);
+    for (int i : agents) {  // how often the guidance foretold the move (it had a cell for it)
+      if (preferred[i] == kNoCell) continue;
+      ++guided_moves_;
+      if (moves[i] != preferred[i]) ++guidance_missed_;
+    }
   } else {
     pibt_.step(world, moves, agents, fixed);
   }
@@ -608,6 +613,7 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"guidance_searches", guidance_ ? guidance_->searches() : 0},
           {"guidance_kept", guidance_ ? guidance_->kept() : 0},
           {"guidance_expansions", guidance_ ? guidance_->expansions() : 0},
+          {"guidance_missed_share", guided_moves_ ? double(guidance_missed_) / guided_moves_ : 0.0},
           {"failure_fallbacks", failure_fallbacks_},
           {"timeouts", timeouts_},
           {"repairs", repairs_},

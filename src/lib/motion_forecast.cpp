@@ -9,13 +9,15 @@ Cell goal_of(const WorldView& world, int i) {
   return world.goals[i].empty() ? world.positions[i] : world.goals[i][0];
 }
 
-// The rollout guidance: the real one's costs, a shorter window, and paths kept until the agent
-// leaves them or they run out (the first rollout step replans every agent anyway).
+// The rollout guidance: the real one's costs, a shorter window, and paths kept lazily: until the
+// agent leaves its path, the path runs out, or it meets another within kRecheck steps.
+constexpr int kRecheck = 3;
+
 LocalGuidanceConfig rollout_guidance(const MotionForecastConfig& f, LocalGuidanceConfig c) {
   c.window = f.window;
   c.lazy = true;
   c.keep_optimal = false;
-  c.recheck = 0;
+  c.recheck = kRecheck;
   c.keep = 0;
   c.refresh = 0;
   c.phases = 0;
@@ -35,8 +37,8 @@ MotionForecast::MotionForecast(const Grid& grid, int num_agents, MotionForecastC
 MotionForecast::~MotionForecast() = default;
 
 // The rollout guidance at world.timestep + 1: the rolled agents' guidance paths from then on
-// (replanned at the first rollout step, as they carry no goal), the others' given cells as
-// obstacles, nothing for the rest.
+// (kept by the lazy rule, replanned when they meet another soon or were left), the others'
+// given cells as obstacles (never replanned), nothing for the rest.
 void MotionForecast::start_rollout(const WorldView& world, const LocalGuidance& guidance,
                                    const std::vector<std::vector<Cell>>* fixed) {
   const int t1 = world.timestep + 1;
@@ -44,7 +46,7 @@ void MotionForecast::start_rollout(const WorldView& world, const LocalGuidance& 
     std::vector<Cell> p;
     if (in_set_[j]) p = guidance.path_from(j, t1);
     else if (fixed && !(*fixed)[j].empty()) p = (*fixed)[j];
-    if (!p.empty() && p[0] == pos_[j]) guide_->set_path(j, t1, p);
+    if (!p.empty() && p[0] == pos_[j]) guide_->set_path(j, t1, p, in_set_[j] ? goal_of(world, j) : kNoCell);
     else guide_->clear(j);
   }
 }

@@ -2,6 +2,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "gdrhcr/cut_cells.hpp"
 #include "gdrhcr/gd_rhcr.hpp"
 #include "gdrhcr/motion_forecast.hpp"
 #include "gdrhcr/pibt.hpp"
@@ -50,6 +51,16 @@ LocalGuidanceConfig guidance_config(Params& p, int num_agents) {
   c.phases = p.get_int("lg-phases", num_agents > kLazyGuidanceAgents ? 2 : 0, 0, 1000);
   if (c.phases == 1) throw ParamError("parameter lg-phases must be 0 (sequential) or >= 2");
   return c;
+}
+
+// The product default's motion forecast: 10 steps on maps where at least 1% of the free cells
+// are cut cells (dead ends, one-lane passages: random-32-32-20 has 2.8%), where agents' real
+// motion strays from their guidance (backing out of dead ends, swaps) and guidance planned around
+// the forecast gains 5-8% (docs/results.md, issue 11); none on biconnected maps (warehouses, open
+// maps: no gain there, for twice the CPU) and none past kLazyGuidanceAgents agents.
+int default_forecast_steps(const Grid& grid, int num_agents) {
+  if (num_agents > kLazyGuidanceAgents) return 0;
+  return cut_cell_share(grid) >= 0.01 ? 10 : 0;
 }
 
 // The motion forecast the guidance is planned around (motion_forecast.hpp): `lg-forecast` steps
@@ -107,7 +118,7 @@ const std::vector<std::pair<std::string, PlannerFactory>>& registry() {
          c.guidance = p.get_choice("guidance", c.guidance ? "local" : "none", {"none", "local"}) == "local";
          c.lg = guidance_config(p, n);
          c.lg.seed = seed;
-         c.forecast = forecast_config(p, c.forecast.steps);
+         c.forecast = forecast_config(p, paper ? 0 : default_forecast_steps(grid, n));
          return std::make_unique<GdRhcrPlanner>(grid, n, seed, c);
        }},
   };

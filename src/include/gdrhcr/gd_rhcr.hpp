@@ -140,6 +140,7 @@ class GdRhcrPlanner : public Planner {
   long density_fallbacks_ = 0, budget_skips_ = 0;
   long threshold_fallbacks_ = 0, failure_fallbacks_ = 0, timeouts_ = 0, repairs_ = 0;
   long pbs_nodes_ = 0, soft_conflicts_ = 0, solved_steps_ = 0;
+  long guided_moves_ = 0, guidance_missed_ = 0;  // secondary moves with a guidance cell; not onto it
   double plan_time_sum_all_steps_ = 0, primary_time_sum_ = 0;
 };
 

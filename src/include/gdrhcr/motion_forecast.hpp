@@ -9,10 +9,11 @@
 // around their wishes (their last guidance paths), which are not collision-free among themselves.
 //
 // Here, after a step is decided, the agents are rolled `steps` - 1 more steps forward by a copy
-// of the step's PIBT (priorities, swap, tie-breaks) following a rollout guidance of its own: at
-// the first rollout step every agent's guidance is replanned from its new cell (as the next real
-// update will do), later ones keep a path until the agent leaves it or it runs out (cheap), with
-// a shorter window. At the next step, before the real guidance update, every agent that stands
+// of the step's PIBT (priorities, swap, tie-breaks) following a rollout guidance of its own,
+// with a shorter window, that starts from the step's guidance paths and replans a path lazily:
+// when the agent left it, it ran out, or it meets another path within the next 3 steps. (Not
+// replanning paths that meet others, i.e. following the step's guidance, forecasts badly: see
+// docs/results.md.) At the next step, before the real guidance update, every agent that stands
 // where the forecast says and still has the same goal gets the rest of its forecast as its path
 // in the guidance table; agents with a new goal get none. The update then replans every agent in
 // priority order as usual, each against the new paths of the agents before it and the forecasts
