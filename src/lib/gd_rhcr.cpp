@@ -370,7 +370,7 @@ void GdRhcrPlanner::roll_forecast(const WorldView& world, const std::vector<int>
     const int k = t + 1 - plan_of_[i]->start_time;
     if (k >= 0 && k < static_cast<int>(path.size()) && path[k] == next[i]) fixed[i].assign(path.begin() + k, path.end());
   }
-  forecast_->roll(world, next, secondary, pibt_, *guidance_, &fixed);
+  forecast_->roll(world, next, secondary, pibt_, *guidance_, &fixed, step_deadline_);  // within the step budget
 }
 
 // The final check: if the assembled step has a collision (possible only for V < 2 or with

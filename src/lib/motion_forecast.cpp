@@ -70,7 +70,8 @@ void MotionForecast::fix_others(int k, const std::vector<Cell>& next, const std:
 
 void MotionForecast::roll(const WorldView& world, const std::vector<Cell>& next,
                           const std::vector<int>& agents, const PibtStep& pibt,
-                          const LocalGuidance& guidance, const std::vector<std::vector<Cell>>* fixed) {
+                          const LocalGuidance& guidance, const std::vector<std::vector<Cell>>* fixed,
+                          std::chrono::steady_clock::time_point deadline) {
   const int n = world.num_agents();
   path_.resize(n);
   goal_.resize(n, kNoCell);
@@ -90,7 +91,9 @@ void MotionForecast::roll(const WorldView& world, const std::vector<Cell>& next,
   moves_.assign(n, kNoCell);
   preferred_.assign(n, kNoCell);
   start_rollout(world, guidance, fixed);
+  const bool timed = deadline != std::chrono::steady_clock::time_point::max();
   for (int k = 1; k < cfg_.steps; ++k) {
+    if (timed && std::chrono::steady_clock::now() >= deadline) break;
     const int t = world.timestep + k;
     fix_others(k, next, fixed);
     WorldView view{world.grid, world.dist, t, pos_, world.goals, world.immovable, world.blocked};

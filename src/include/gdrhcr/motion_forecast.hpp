@@ -20,6 +20,7 @@
 // of those after it.
 #pragma once
 
+#include <chrono>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -44,10 +45,12 @@ class MotionForecast {
 
   // Rolls `agents` forward from `next` (their cells at world.timestep + 1) with a copy of `pibt`,
   // starting from the paths of `guidance`. `fixed` (optional) gives, per agent outside `agents`,
-  // its cells from world.timestep + 1 on (empty: it stays at its next cell).
+  // its cells from world.timestep + 1 on (empty: it stays at its next cell). Past `deadline` the
+  // rollout stops: the forecast is shorter.
   void roll(const WorldView& world, const std::vector<Cell>& next, const std::vector<int>& agents,
             const PibtStep& pibt, const LocalGuidance& guidance,
-            const std::vector<std::vector<Cell>>* fixed = nullptr);
+            const std::vector<std::vector<Cell>>* fixed = nullptr,
+            std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max());
 
   // Before the guidance update of a later step: `agents` that stand where their forecast says,
   // with the goal it was made for, get the rest of it as their path in `guidance`; those whose
