@@ -613,6 +613,8 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"guidance_searches", guidance_ ? guidance_->searches() : 0},
           {"guidance_kept", guidance_ ? guidance_->kept() : 0},
           {"guidance_expansions", guidance_ ? guidance_->expansions() : 0},
+          {"forecast_searches", forecast_ ? forecast_->searches() : 0},
+          {"forecast_expansions", forecast_ ? forecast_->expansions() : 0},
           {"guidance_missed_share", guided_moves_ ? double(guidance_missed_) / guided_moves_ : 0.0},
           {"failure_fallbacks", failure_fallbacks_},
           {"timeouts", timeouts_},

@@ -33,7 +33,7 @@ namespace gdrhcr {
 
 struct MotionForecastConfig {
   int steps = 0;    // forecast length counting the decided step; < 2 = no forecast
-  int window = 10;  // the rollout guidance's window
+  int window = 8;   // the rollout guidance's window
 };
 
 class MotionForecast {
@@ -60,6 +60,9 @@ class MotionForecast {
   // Agent i's forecast cells from the last roll's world.timestep + 1 on (empty when none).
   const std::vector<Cell>& forecast(int i) const { return path_[i]; }
   const MotionForecastConfig& config() const { return cfg_; }
+  // The rollout guidance's searches and their expansions so far.
+  long searches() const { return guide_->searches(); }
+  long expansions() const { return guide_->expansions(); }
 
  private:
   void start_rollout(const WorldView& world, const LocalGuidance& guidance,
