@@ -1,6 +1,7 @@
 #include "gdrhcr/motion_forecast.hpp"
 
 #include <algorithm>
+#include <functional>
 
 namespace gdrhcr {
 
@@ -119,6 +120,9 @@ void MotionForecast::seed(const WorldView& world, const std::vector<int>& agents
     }
     if (path_[i][off] != world.positions[i]) continue;
     rest.assign(path_[i].begin() + off, path_[i].end());
+    // A forecast that never moves is not used: planned around as a parked agent, it keeps the
+    // agent parked (random-32-32-20: an agent waited 311 steps); its own last path stays.
+    if (std::adjacent_find(rest.begin(), rest.end(), std::not_equal_to<Cell>()) == rest.end()) continue;
     guidance.set_path(i, world.timestep, rest);
   }
 }

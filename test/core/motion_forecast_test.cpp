@@ -80,28 +80,32 @@ TEST(MotionForecast, IsACollisionFreeRolloutFromTheDecidedStep) {
   }
 }
 
-TEST(MotionForecast, SeedsOnlyAgentsOnTheirForecastWithTheSameGoal) {
+TEST(MotionForecast, SeedsOnlyAgentsOnTheirForecastWithTheSameGoalThatMove) {
   Grid g = Grid::from_rows({"..........", "..........", ".........."});
   DistTable dist(g);
-  std::vector<Cell> pos = {g.cell(0, 0), g.cell(0, 2)};
-  std::vector<std::vector<Cell>> goals = {{g.cell(9, 0)}, {g.cell(9, 2)}};
+  std::vector<Cell> pos = {g.cell(0, 0), g.cell(0, 2), g.cell(5, 1)};
+  std::vector<std::vector<Cell>> goals = {{g.cell(9, 0)}, {g.cell(9, 2)}, {g.cell(5, 1)}};
   LocalGuidanceConfig lg;
-  LocalGuidance guidance(g, 2, lg);
-  PibtStep pibt(g, 2, 1);
-  MotionForecast f(g, 2, forecast(5), lg);
+  LocalGuidance guidance(g, 3, lg);
+  PibtStep pibt(g, 3, 1);
+  MotionForecast f(g, 3, forecast(5), lg);
   WorldView w{g, dist, 0, pos, goals};
-  guidance.update(w, {0, 1});
-  std::vector<Cell> preferred = {guidance.next_cell(0, 0, pos[0]), guidance.next_cell(1, 0, pos[1])};
-  std::vector<Cell> next(2, kNoCell);
+  guidance.update(w, {0, 1, 2});
+  std::vector<Cell> preferred(3), next(3, kNoCell);
+  for (int i = 0; i < 3; ++i) preferred[i] = guidance.next_cell(i, 0, pos[i]);
   pibt.step(w, next, {}, {}, &preferred);
-  f.roll(w, next, {0, 1}, pibt, guidance);
-  // Step 1: agent 0 is where its forecast says; agent 1 got a new goal.
+  f.roll(w, next, {0, 1, 2}, pibt, guidance);
+  // Step 1: agent 0 is where its forecast says; agent 1 got a new goal; agent 2 rests on its
+  // goal, so its forecast never moves.
   std::vector<Cell> pos1 = next;
-  std::vector<std::vector<Cell>> goals1 = {{g.cell(9, 0)}, {g.cell(0, 1)}};
+  std::vector<std::vector<Cell>> goals1 = {{g.cell(9, 0)}, {g.cell(0, 1)}, {g.cell(5, 1)}};
+  ASSERT_EQ(f.forecast(2), std::vector<Cell>(5, g.cell(5, 1)));
+  const auto own_path = guidance.path_from(2, 1);
   WorldView w1{g, dist, 1, pos1, goals1};
-  f.seed(w1, {0, 1}, guidance);
+  f.seed(w1, {0, 1, 2}, guidance);
   EXPECT_EQ(guidance.path_from(0, 1), f.forecast(0));
   EXPECT_TRUE(guidance.path_from(1, 1).empty());
+  EXPECT_EQ(guidance.path_from(2, 1), own_path);  // kept, not replaced by the parked forecast
 }
 
 TEST(MotionForecast, GuidedPibtCorridorHeadOnAllArrive) {
@@ -137,7 +141,7 @@ TEST(MotionForecast, GdRhcrCorridorAndNonBiconnectedMapCollisionFreeWithGoals) {
     EXPECT_GT(std::unique(visited.begin(), visited.end()) - visited.begin(), 1) << "agent " << i << " never moved";
   }
   EXPECT_EQ(p.params()["lg_forecast"].get<int>(), 10);
-  EXPECT_EQ(p.params()["lg_forecast_window"].get<int>(), 8);
+  EXPECT_EQ(p.params()["lg_forecast_window"].get<int>(), 10);
 }
 
 TEST(MotionForecast, DeterministicAndIdenticalAcrossThreadCountsInBudgetMode) {
@@ -164,7 +168,7 @@ TEST(MotionForecast, DefaultOnlyOnMapsWithCutCells) {
     auto planner = make_planner("gd-rhcr", p, g, agents, 1);
     return planner->params()["lg_forecast"].get<int>();
   };
-  EXPECT_EQ(forecast_of("random-32-32-20.map", 300, "default"), 8);
+  EXPECT_EQ(forecast_of("random-32-32-20.map", 300, "default"), 10);
   EXPECT_EQ(forecast_of("warehouse-10-20-10-2-1.map", 400, "default"), 0);
   EXPECT_EQ(forecast_of("empty-48-48.map", 400, "default"), 0);
   EXPECT_EQ(forecast_of("random-32-32-20.map", 300, "paper"), 0);

@@ -15,9 +15,10 @@
 // replanning paths that meet others, i.e. following the step's guidance, forecasts badly: see
 // docs/results.md.) At the next step, before the real guidance update, every agent that stands
 // where the forecast says and still has the same goal gets the rest of its forecast as its path
-// in the guidance table; agents with a new goal get none. The update then replans every agent in
-// priority order as usual, each against the new paths of the agents before it and the forecasts
-// of those after it.
+// in the guidance table, unless the forecast never moves (planned around as parked, a parked
+// agent stays parked: it keeps its last path); agents with a new goal get none. The update then
+// replans every agent in priority order as usual, each against the new paths of the agents
+// before it and the forecasts of those after it.
 #pragma once
 
 #include <chrono>
@@ -33,7 +34,7 @@ namespace gdrhcr {
 
 struct MotionForecastConfig {
   int steps = 0;    // forecast length counting the decided step; < 2 = no forecast
-  int window = 8;   // the rollout guidance's window
+  int window = 10;  // the rollout guidance's window
 };
 
 class MotionForecast {
@@ -53,8 +54,8 @@ class MotionForecast {
             std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max());
 
   // Before the guidance update of a later step: `agents` that stand where their forecast says,
-  // with the goal it was made for, get the rest of it as their path in `guidance`; those whose
-  // goal changed get no path. Others keep what they have.
+  // with the goal it was made for, get the rest of it as their path in `guidance` if it moves at
+  // all; those whose goal changed get no path. Others keep what they have.
   void seed(const WorldView& world, const std::vector<int>& agents, LocalGuidance& guidance) const;
 
   // Agent i's forecast cells from the last roll's world.timestep + 1 on (empty when none).
