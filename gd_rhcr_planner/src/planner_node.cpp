@@ -109,6 +109,25 @@ class PlannerNode {
   static constexpr double kStepBudgetShare = 0.9;  // of the plan deadline
   static std::string step_budget_string(double plan_deadline);
 
+  // A tick's parts (on_tick); those named _locked with mutex_ held.
+  struct TickInput {
+    uint64_t tick = 0;
+    std::vector<std::vector<Cell>> goals;  // per robot (Fleet::fill_goals)
+    std::vector<uint8_t> held;             // per robot: paused or stopped, no new move
+    std::vector<RobotRecord> robots;
+    bool proceed_without_missing = false;
+  };
+  TickInput gather_tick_locked(std::unique_ptr<DeadlinePlanner>& retired);
+  gd_rhcr_msgs::GroupArray group_message(const TickOutput& exec, const gdrhcr::Planner* primary,
+                                         std::vector<int>& group_of) const;
+  void count_outcome_locked(const TickOutput& exec, uint64_t tick);
+  void publish_commands_locked(const std::vector<Cell>& command, uint64_t tick, const ros::Time& stamp);
+  double record_timing_locked(std::chrono::steady_clock::time_point wall0, uint64_t tick,
+                              const gdrhcr::StepReport& report);
+  void publish_stats_locked(const TickOutput& exec, const gdrhcr::Planner* primary,
+                            const gd_rhcr_msgs::GroupArray& groups_msg, uint64_t tick, const ros::Time& stamp,
+                            double step_time);
+
   // With mutex_ held.
   void publish_events_locked();
   void publish_markers_locked(const std::vector<Cell>& pos, const std::vector<Cell>& next,
@@ -568,56 +587,20 @@ void PlannerNode::publish_events_locked() {
   }
 }
 
+// One tick: gather the fleet's state and dispatch tasks (locked), run the execution layer
+// (unlocked, so services and state updates keep flowing), then publish and count (locked).
 void PlannerNode::on_tick(const ros::TimerEvent& ev) {
   const auto wall0 = std::chrono::steady_clock::now();
-  const double period = 1.0 / tick_rate_;
-  std::vector<Cell> pos, next;
-  std::vector<std::vector<Cell>> goals;
-  std::vector<uint8_t> held;
-  std::vector<RobotRecord> robots;
-  bool proceed_without_missing = false;
-  uint64_t tick;
   std::unique_ptr<DeadlinePlanner> retired;  // a planner replaced by reconfigure, destroyed unlocked
+  TickInput in;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    tick = ++tick_;
-    apply_reconfigure_locked(retired);
-    for (int r : fleet_->mark_silent(ros::Time::now().toSec(), offline_timeout_))
-      ROS_WARN("robot %d sent no state for %.1f s: offline (an obstacle at its last cell); its task is requeued",
-               r, offline_timeout_);
-    // Robots that never reported are waited for ~offline_timeout after the first report, then
-    // left out (taken to be off the floor); the rest of the fleet moves (issue 13).
-    const double now_s = ros::Time::now().toSec();
-    const int missing = fleet_->missing_robots();
-    if (missing < fleet_->num_robots() && first_report_s_ == 0) first_report_s_ = now_s;
-    proceed_without_missing = first_report_s_ > 0 && now_s - first_report_s_ >= offline_timeout_;
-    if (missing > 0 && proceed_without_missing) {
-      last_problem_ = std::to_string(missing) + " robots never reported a state: left out of planning";
-      last_problem_tick_ = tick_;
-      ROS_WARN_THROTTLE(10.0, "%s", last_problem_.c_str());
-    }
-    // Tasks move on only once the fleet does (every robot reported, or the wait for the missing
-    // ones is over): before, robots without a cell must not be assigned anything.
-    if (missing == 0 || proceed_without_missing) {
-      fleet_->advance();
-      dispatch_stats_ = dispatcher_->dispatch(*fleet_, *dist_, operator_->unavailable());
-    }
-    publish_events_locked();
-    fleet_->fill_positions(pos);
-    fleet_->fill_goals(goals);
-    held.assign(pos.size(), 0);
-    robots.reserve(pos.size());
-    for (int r = 0; r < fleet_->num_robots(); ++r) {
-      robots.push_back(fleet_->robot(r));
-      held[r] = operator_->holds(r);  // paused, emergency stop: no new move
-    }
+    in = gather_tick_locked(retired);
   }
-
   // Liveness, planning, reservation, commitment and validation: the execution layer (ADG or
-  // lock-step, execution.hpp), outside the lock, so services and state updates keep flowing.
-  const auto& grid = map_->grid;
+  // lock-step, execution.hpp).
   executor_->set_plan_deadline(plan_deadline_);
-  TickOutput exec = executor_->tick(robots, goals, *planner_, proceed_without_missing, &held);
+  const TickOutput exec = executor_->tick(in.robots, in.goals, *planner_, in.proceed_without_missing, &in.held);
   if (!exec.stepped) {
     std::lock_guard<std::mutex> lock(mutex_);
     ++skipped_;
@@ -627,47 +610,99 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     return;
   }
   for (const std::string& w : exec.warnings) ROS_WARN("%s", w.c_str());
-  pos = exec.cells;
-  next = exec.command;
-  const DeadlineOutcome& outcome = exec.outcome;
-  const gdrhcr::StepReport& report = outcome.report;
-  const int held_count = exec.held + exec.waiting;
-  const std::string plan_error = exec.plan_error;
 
   // The primary planner's groups and paths, when it planned this tick (else it may still be
   // running an abandoned step on its worker and must not be read).
-  const gdrhcr::Planner* primary = outcome.fallback ? nullptr : &planner_->primary();
-  std::vector<int> group_of(pos.size());
-  std::iota(group_of.begin(), group_of.end(), 0);
-  gd_rhcr_msgs::GroupArray groups_msg;
-  if (primary) {
-    const auto groups = primary->groups();
-    for (size_t g = 0; g < groups.size(); ++g) {
-      gd_rhcr_msgs::Group gm;
-      for (int a : groups[g].agents) {
-        if (a < 0 || a >= static_cast<int>(exec.robot_of_agent.size())) continue;
-        const int r = exec.robot_of_agent[a];  // the planner sees the robots that reported
-        gm.members.push_back(r);
-        group_of[r] = static_cast<int>(g);
-      }
-      gm.size = gm.members.size();
-      gm.solver = groups[g].solver;
-      groups_msg.groups.push_back(gm);
-    }
-  }
+  const gdrhcr::Planner* primary = exec.outcome.fallback ? nullptr : &planner_->primary();
+  std::vector<int> group_of;
+  gd_rhcr_msgs::GroupArray groups_msg = group_message(exec, primary, group_of);
   std::vector<std::vector<Cell>> planned;
   if (primary && publish_markers_) {
-    planned.resize(pos.size());
+    planned.resize(exec.cells.size());
     for (size_t a = 0; a < exec.robot_of_agent.size(); ++a)
       planned[exec.robot_of_agent[a]] = primary->planned_path(static_cast<int>(a));
   }
 
-  gd_rhcr_msgs::StepCommandArray cmds;
-  cmds.header.stamp = ev.current_real.isZero() ? ros::Time::now() : ev.current_real;
-  cmds.header.frame_id = frame_id_;
-  cmds.tick = tick;
-  cmds.tick_period = period;
   std::lock_guard<std::mutex> lock(mutex_);
+  count_outcome_locked(exec, in.tick);
+  const ros::Time stamp = ev.current_real.isZero() ? ros::Time::now() : ev.current_real;
+  publish_commands_locked(exec.command, in.tick, stamp);
+  const double step_time = record_timing_locked(wall0, in.tick, exec.outcome.report);
+  publish_stats_locked(exec, primary, groups_msg, in.tick, stamp, step_time);
+  if (!groups_msg.groups.empty()) {
+    groups_msg.header.stamp = stamp;
+    groups_msg.header.frame_id = frame_id_;
+    groups_msg.tick = in.tick;
+    groups_pub_.publish(groups_msg);
+  }
+  if (publish_markers_) publish_markers_locked(exec.cells, exec.command, in.goals, group_of, planned);
+  if (retired) ROS_DEBUG("tick %lu: previous planner retired", (unsigned long)in.tick);
+}
+
+// The start of a tick: a pending reconfigure, silent robots, the wait for robots that never
+// reported, task dispatch, and a copy of what the execution layer needs.
+PlannerNode::TickInput PlannerNode::gather_tick_locked(std::unique_ptr<DeadlinePlanner>& retired) {
+  TickInput in;
+  in.tick = ++tick_;
+  apply_reconfigure_locked(retired);
+  for (int r : fleet_->mark_silent(ros::Time::now().toSec(), offline_timeout_))
+    ROS_WARN("robot %d sent no state for %.1f s: offline (an obstacle at its last cell); its task is requeued",
+             r, offline_timeout_);
+  // Robots that never reported are waited for ~offline_timeout after the first report, then
+  // left out (taken to be off the floor); the rest of the fleet moves (issue 13).
+  const double now_s = ros::Time::now().toSec();
+  const int missing = fleet_->missing_robots();
+  if (missing < fleet_->num_robots() && first_report_s_ == 0) first_report_s_ = now_s;
+  in.proceed_without_missing = first_report_s_ > 0 && now_s - first_report_s_ >= offline_timeout_;
+  if (missing > 0 && in.proceed_without_missing) {
+    last_problem_ = std::to_string(missing) + " robots never reported a state: left out of planning";
+    last_problem_tick_ = tick_;
+    ROS_WARN_THROTTLE(10.0, "%s", last_problem_.c_str());
+  }
+  // Tasks move on only once the fleet does (every robot reported, or the wait for the missing
+  // ones is over): before, robots without a cell must not be assigned anything.
+  if (missing == 0 || in.proceed_without_missing) {
+    fleet_->advance();
+    dispatch_stats_ = dispatcher_->dispatch(*fleet_, *dist_, operator_->unavailable());
+  }
+  publish_events_locked();
+  fleet_->fill_goals(in.goals);
+  in.held.assign(fleet_->num_robots(), 0);
+  in.robots.reserve(fleet_->num_robots());
+  for (int r = 0; r < fleet_->num_robots(); ++r) {
+    in.robots.push_back(fleet_->robot(r));
+    in.held[r] = operator_->holds(r);  // paused, emergency stop: no new move
+  }
+  return in;
+}
+
+// The planner's groups by robot id (group_of: each robot's group; a robot alone when the
+// planner gave none).
+gd_rhcr_msgs::GroupArray PlannerNode::group_message(const TickOutput& exec, const gdrhcr::Planner* primary,
+                                                    std::vector<int>& group_of) const {
+  group_of.resize(exec.cells.size());
+  std::iota(group_of.begin(), group_of.end(), 0);
+  gd_rhcr_msgs::GroupArray msg;
+  if (!primary) return msg;
+  const auto groups = primary->groups();
+  for (size_t g = 0; g < groups.size(); ++g) {
+    gd_rhcr_msgs::Group gm;
+    for (int a : groups[g].agents) {
+      if (a < 0 || a >= static_cast<int>(exec.robot_of_agent.size())) continue;
+      const int r = exec.robot_of_agent[a];  // the planner sees the robots that reported
+      gm.members.push_back(r);
+      group_of[r] = static_cast<int>(g);
+    }
+    gm.size = gm.members.size();
+    gm.solver = groups[g].solver;
+    msg.groups.push_back(gm);
+  }
+  return msg;
+}
+
+// Fallback ticks, deadline misses, planner errors and rejected steps.
+void PlannerNode::count_outcome_locked(const TickOutput& exec, uint64_t tick) {
+  const DeadlineOutcome& outcome = exec.outcome;
   if (outcome.fallback) {
     ++fallback_ticks_;
     if (outcome.primary_late) {
@@ -682,22 +717,33 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
       ROS_ERROR_THROTTLE(1.0, "%s", last_problem_.c_str());
     }
   }
-  if (!plan_error.empty()) {
+  if (!exec.plan_error.empty()) {
     ++invalid_plans_;
-    last_problem_ = "planner step rejected, all robots wait: " + plan_error;
+    last_problem_ = "planner step rejected, all robots wait: " + exec.plan_error;
     last_problem_tick_ = tick_;
     ROS_ERROR_THROTTLE(1.0, "%s", last_problem_.c_str());
   }
-  cmds.commands.reserve(pos.size());
-  for (size_t r = 0; r < pos.size(); ++r) {
-    if (next[r] == gdrhcr::kNoCell) continue;  // a robot that never reported gets no command
+}
+
+// Every robot's command (a robot that never reported gets none), on the fleet topic and, if
+// enabled, on its own topic.
+void PlannerNode::publish_commands_locked(const std::vector<Cell>& command, uint64_t tick, const ros::Time& stamp) {
+  const auto& grid = map_->grid;
+  gd_rhcr_msgs::StepCommandArray cmds;
+  cmds.header.stamp = stamp;
+  cmds.header.frame_id = frame_id_;
+  cmds.tick = tick;
+  cmds.tick_period = 1.0 / tick_rate_;
+  cmds.commands.reserve(command.size());
+  for (size_t r = 0; r < command.size(); ++r) {
+    if (command[r] == gdrhcr::kNoCell) continue;
     cmds.commands.emplace_back();
     auto& c = cmds.commands.back();
     c.robot_id = r;
     c.tick = tick;
-    c.next_x = grid.x_of(next[r]);
-    c.next_y = grid.y_of(next[r]);
-    c.target_pose = pose_of(next[r]);
+    c.next_x = grid.x_of(command[r]);
+    c.next_y = grid.y_of(command[r]);
+    c.target_pose = pose_of(command[r]);
     c.mode = operator_->mode(r, fleet_->command_mode(r));
     c.task_id = fleet_->task_of(r);
   }
@@ -706,7 +752,12 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
   tick_stamp_->tick(cmds.header.stamp);
   for (const auto& c : cmds.commands)
     if (c.robot_id < robot_pubs_.size()) robot_pubs_[c.robot_id].publish(c);
+}
 
+// The tick's wall time (overruns) and plan-time figures; returns the tick's wall time.
+double PlannerNode::record_timing_locked(std::chrono::steady_clock::time_point wall0, uint64_t tick,
+                                         const gdrhcr::StepReport& report) {
+  const double period = 1.0 / tick_rate_;
   const double step_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   const double now_s = ros::WallTime::now().toSec();
   tick_stamps_.push_back(now_s);
@@ -720,26 +771,32 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
   plan_time_max_ = std::max(plan_time_max_, report.plan_time_s);
   step_time_max_ = std::max(step_time_max_, step_time);
   ++plan_time_count_;
+  return step_time;
+}
 
+void PlannerNode::publish_stats_locked(const TickOutput& exec, const gdrhcr::Planner* primary,
+                                       const gd_rhcr_msgs::GroupArray& groups_msg, uint64_t tick,
+                                       const ros::Time& stamp, double step_time) {
+  const gdrhcr::StepReport& report = exec.outcome.report;
   gd_rhcr_msgs::PlannerStats st;
-  st.header.stamp = cmds.header.stamp;
+  st.header.stamp = stamp;
   st.tick = tick;
   st.planner = planner_->primary().name();
-  st.num_robots = pos.size();
+  st.num_robots = exec.cells.size();
   st.planned = report.planned;
   st.plan_time = report.plan_time_s;
   st.step_time = step_time;
-  st.tick_period = period;
+  st.tick_period = 1.0 / tick_rate_;
   st.overruns = overruns_;
   st.skipped_ticks = skipped_;
-  st.forced_waits = held_count;
+  st.forced_waits = exec.held + exec.waiting;
   st.tasks_queued = fleet_->count_in_state(kQueued);
   st.tasks_active = fleet_->count_in_state(kAssigned) + fleet_->count_in_state(kPicked);
   st.tasks_delivered = fleet_->delivered_total();
   st.tasks_failed = fleet_->failed_total();
   st.num_groups = groups_msg.groups.size();
   st.fallback_ticks = fallback_ticks_;
-  st.fallback = outcome.fallback;
+  st.fallback = exec.outcome.fallback;
   st.offline_robots = fleet_->offline_count();
   if (primary) {
     try {
@@ -780,13 +837,6 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
   st.paused_robots = operator_->paused_count();
   st.emergency_stop = operator_->emergency_stop();
   stats_pub_.publish(st);
-  if (!groups_msg.groups.empty()) {
-    groups_msg.header = cmds.header;
-    groups_msg.tick = tick;
-    groups_pub_.publish(groups_msg);
-  }
-  if (publish_markers_) publish_markers_locked(pos, next, goals, group_of, planned);
-  if (retired) ROS_DEBUG("tick %lu: previous planner retired", (unsigned long)tick);
 }
 
 void PlannerNode::publish_markers_locked(const std::vector<Cell>& pos, const std::vector<Cell>& next,
