@@ -48,9 +48,9 @@ ABLATION = [
     ("GD-RHCR paper + swap", ["--planner", "gd-rhcr", "--preset", "paper", "--swap", "1"]),
     ("GD-RHCR default without the density rule", ["--planner", "gd-rhcr", "--max-density", "1"]),
     ("GD-RHCR default, guided PIBT for every group", ["--planner", "gd-rhcr", "--solver", "pibt"]),
-    ("PIBT + local guidance + motion forecast (10 steps)", ["--planner", "pibt", "--guidance", "local", "--lg-forecast", "10"]),
+    ("PIBT + local guidance + motion forecast (8 steps)", ["--planner", "pibt", "--guidance", "local", "--lg-forecast", "8"]),
     ("GD-RHCR default, no motion forecast", ["--planner", "gd-rhcr", "--lg-forecast", "0"]),
-    ("GD-RHCR default, motion forecast (10 steps) on every map", ["--planner", "gd-rhcr", "--lg-forecast", "10"]),
+    ("GD-RHCR default, motion forecast (8 steps) on every map", ["--planner", "gd-rhcr", "--lg-forecast", "8"]),
 ]
 
 

@@ -141,7 +141,7 @@ TEST(MotionForecast, GdRhcrCorridorAndNonBiconnectedMapCollisionFreeWithGoals) {
     EXPECT_GT(std::unique(visited.begin(), visited.end()) - visited.begin(), 1) << "agent " << i << " never moved";
   }
   EXPECT_EQ(p.params()["lg_forecast"].get<int>(), 10);
-  EXPECT_EQ(p.params()["lg_forecast_window"].get<int>(), 10);
+  EXPECT_EQ(p.params()["lg_forecast_window"].get<int>(), 8);
 }
 
 TEST(MotionForecast, DeterministicAndIdenticalAcrossThreadCountsInBudgetMode) {
@@ -168,7 +168,7 @@ TEST(MotionForecast, DefaultOnlyOnMapsWithCutCells) {
     auto planner = make_planner("gd-rhcr", p, g, agents, 1);
     return planner->params()["lg_forecast"].get<int>();
   };
-  EXPECT_EQ(forecast_of("random-32-32-20.map", 300, "default"), 10);
+  EXPECT_EQ(forecast_of("random-32-32-20.map", 300, "default"), 8);
   EXPECT_EQ(forecast_of("warehouse-10-20-10-2-1.map", 400, "default"), 0);
   EXPECT_EQ(forecast_of("empty-48-48.map", 400, "default"), 0);
   EXPECT_EQ(forecast_of("random-32-32-20.map", 300, "paper"), 0);

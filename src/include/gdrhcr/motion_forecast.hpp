@@ -34,7 +34,7 @@ namespace gdrhcr {
 
 struct MotionForecastConfig {
   int steps = 0;    // forecast length counting the decided step; < 2 = no forecast
-  int window = 10;  // the rollout guidance's window
+  int window = 8;   // the rollout guidance's window
 };
 
 class MotionForecast {
