@@ -10,6 +10,7 @@
 #include <iostream>
 #include <string>
 
+#include "gdrhcr/distinct_goal_stream.hpp"
 #include "gdrhcr/lorr_io.hpp"
 #include "gdrhcr/simulator.hpp"
 #include "gdrhcr/validator.hpp"
@@ -34,6 +35,8 @@ const char* kUsage =
     "  --steps N           timesteps to simulate (default 500)\n"
     "  --seed N            seed for starts, tasks and planner tie-breaks (default 0)\n"
     "  --lookahead N       goals known ahead per agent, current one included (default 3)\n"
+    "  --distinct-goals 0|1 1: never hand out a goal another agent holds (redrawn; with\n"
+    "                      --lookahead 1, LLLG's rule: not another agent's current goal)\n"
     "  --dist-budget-mb N  memory budget of the distance-table cache (default 256)\n"
     "  --out FILE          write the result JSON here (default: standard output)\n"
     "  --paths FILE        write executed paths, one line per agent: 'i: (x,y),(x,y),...'\n"
@@ -108,6 +111,7 @@ int main(int argc, char** argv) {
     const uint64_t seed = args.get_u64("seed", 0);
     const int lookahead = args.get_int("lookahead", lorr ? lorr->num_tasks_reveal : 3, 1, 1000);
     const int budget_mb = args.get_int("dist-budget-mb", 256, 1, 1 << 20);
+    const bool distinct_goals = args.get_int("distinct-goals", 0, 0, 1) == 1;
     const std::string out_path = args.get_string("out", "");
     const std::string paths_path = args.get_string("paths", "");
     if (task_kind == "random" && (!pickups_file.empty() || !deliveries_file.empty()))
@@ -134,6 +138,11 @@ int main(int argc, char** argv) {
       task_info["pickups"] = cells.pickups.size();
       task_info["deliveries"] = cells.deliveries.size();
       tasks = std::make_unique<PickupDeliveryStream>(grid, cells.pickups, cells.deliveries, seed);
+    }
+    if (distinct_goals) {
+      if (lorr) throw ParamError("--distinct-goals cannot be combined with --lorr-problem (its task list is fixed)");
+      tasks = std::make_unique<DistinctGoalStream>(std::move(tasks));
+      task_info["distinct_goals"] = true;
     }
     const std::vector<Cell> starts = lorr ? lorr->starts : random_starts(grid, agents, seed);
     auto planner = make_planner(planner_name, args, grid, agents, seed);
