@@ -325,15 +325,14 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, Dead
   gdrhcr::WorldView world{grid_, dist, static_cast<int>(steps_), positions, agent_goals};
   bool any_immovable = std::any_of(immovable.begin(), immovable.end(), [](uint8_t v) { return v != 0; });
   if (any_immovable) world.immovable = &immovable;
-  // Blocked for the planner: the late and waiting robots' cells no planned agent stands on (a
-  // robot committed behind a late one has its end state in the late robot's cell).
+  // Blocked for the planner: the late and waiting robots' cells (one per robot, so no two alike)
+  // no planned agent stands on (a robot committed behind a late one has its end state in the late
+  // robot's cell).
   std::vector<uint8_t> is_position(grid_.num_cells(), 0);
   for (Cell c : positions) is_position[c] = 1;
   std::vector<Cell> planner_blocked;
   for (Cell c : late_cells)
     if (!is_position[c]) planner_blocked.push_back(c);
-  std::sort(planner_blocked.begin(), planner_blocked.end());
-  planner_blocked.erase(std::unique(planner_blocked.begin(), planner_blocked.end()), planner_blocked.end());
   if (!planner_blocked.empty()) world.blocked = &planner_blocked;
   std::vector<Cell> next = positions;
   out.outcome = planner.step(world, next, cfg_.plan_deadline_s, obstacle_dist_);
