@@ -207,19 +207,41 @@ void LocalGuidance::update(const WorldView& world, const std::vector<int>& agent
   const int now = world.timestep;
   for (size_t i = 0; i < path_.size(); ++i) drop_past(static_cast<int>(i), now);
   mark_blocked(world, +1);
+  // Immovable agents (a robot still making its committed moves, an offline one) are not searched:
+  // they stay where they are, as a blocked cell does, and the others' guidance goes around them.
+  const std::vector<int>* todo = &agents;
+  std::vector<int> movable;
+  if (world.immovable) {
+    movable.reserve(agents.size());
+    for (int i : agents) {
+      if (!world.is_immovable(i)) {
+        movable.push_back(i);
+        continue;
+      }
+      clear(i);
+      path_[i].assign(blocked_steps() + 1, world.positions[i]);
+      start_[i] = planned_at_[i] = now;
+      enroll(i, +1);
+    }
+    todo = &movable;
+  }
   if (parallel_) {
-    update_banded(world, agents, deadline);
+    update_banded(world, *todo, deadline);
   } else {
-    update_in_order(world, agents, deadline, search_, rng_, counts_);
+    update_in_order(world, *todo, deadline, search_, rng_, counts_);
   }
   mark_blocked(world, -1);
+}
+
+int LocalGuidance::blocked_steps() const {
+  return std::min(cfg_.blocked_steps < 0 ? cfg_.window : cfg_.blocked_steps, cfg_.window);
 }
 
 // Blocked cells (a late robot still leaving them) count as taken in the searches of this update,
 // from now on for `blocked_steps` steps (how long such a cell is expected to stay taken).
 void LocalGuidance::mark_blocked(const WorldView& world, int sign) {
   if (!world.blocked) return;
-  const int steps = std::min(cfg_.blocked_steps < 0 ? cfg_.window : cfg_.blocked_steps, cfg_.window);
+  const int steps = blocked_steps();
   for (Cell c : *world.blocked)
     for (int k = 0; k <= steps; ++k) at(c, slot(world.timestep + k)) += sign;
 }

@@ -186,6 +186,27 @@ TEST(BlockedCellGuidance, CountsABlockedCellAsTaken) {
   EXPECT_EQ(std::find(path.begin(), path.end(), blocked[0]), path.end()) << "the guidance ran through the blocked cell";
 }
 
+// An immovable agent (a robot still making its committed moves, an offline one) stays where it
+// is for the guidance too: it gets no search of its own (which would have it move on towards its
+// goal and free its cell for the others' guidance), and the others go around it.
+TEST(BlockedCellGuidance, AnImmovableAgentStaysInTheOthersGuidance) {
+  const Grid g = corridor();
+  DistTable dist(g);
+  const std::vector<Cell> pos = {g.cell(6, 2), g.cell(4, 2)};
+  const std::vector<std::vector<Cell>> goals = {{g.cell(11, 2)}, {g.cell(9, 2)}};
+  const std::vector<uint8_t> immovable = {1, 0};
+  LocalGuidanceConfig cfg;
+  cfg.window = 10;
+  LocalGuidance lg(g, 2, cfg);
+  WorldView w{g, dist, 0, pos, goals, &immovable};
+  lg.update(w, {0, 1});
+  EXPECT_EQ(lg.next_cell(0, 0, pos[0]), pos[0]) << "the immovable agent's guidance moves it";
+  const auto path = lg.path_from(1, 0);
+  ASSERT_FALSE(path.empty());
+  EXPECT_EQ(path.back(), goals[1][0]);
+  EXPECT_EQ(std::find(path.begin(), path.end(), pos[0]), path.end()) << "the guidance ran through the immovable agent";
+}
+
 // A plan made while an agent was immovable only keeps it in place; once it is free again (a late
 // robot arrived) it must be planned again, not kept there until that plan runs out. (GD-RHCR
 // reused such a plan for up to H steps: every delay of a robot froze it for the whole window.)

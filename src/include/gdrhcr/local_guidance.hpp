@@ -123,6 +123,7 @@ class LocalGuidance {
   struct Parallel;
   void drop_past(int i, int now);
   void mark_blocked(const WorldView& world, int sign);
+  int blocked_steps() const;
   void enroll(int i, int sign);
   bool is_valid(const WorldView& world, int i) const;
   bool keeps(const WorldView& world, int i, std::minstd_rand& rng, Search& search);
