@@ -2,8 +2,11 @@
 """Simulated warehouse robots for gd_rhcr.
 
 Waits for the latched `map` (nav_msgs/OccupancyGrid), places ~num_robots robots on distinct
-free cells (seeded), and executes `step_commands`: each robot moves to its commanded cell,
-taking ~move_fraction of the tick period, and switches its reported cell on arrival. Robots
+free cells (seeded), and executes `step_commands` (every robot, each tick) and
+`step_command_updates` (between ticks, the robots just given a move): each robot keeps its last
+command and, whenever it is at rest and free to move (not delayed, stalled or offline), moves to
+the commanded cell, taking ~move_fraction of the tick period, and switches its reported cell on
+arrival. Robots
 publish `robot_states` (gd_rhcr_msgs/RobotStateArray) and tf map -> <~tf_prefix>robot_N/base_link
 with a smoothly interpolated pose (~tf_prefix, default empty: e.g. "fleet_a/" keeps two fleets'
 robot frames apart). Like a real robot's safety stop (the interlock), a robot never starts
@@ -88,6 +91,8 @@ class Robot(object):
         self.reported = None  # (cell, moving) of the last published state
         self.speed = 1.0  # move time factor (~speed_spread)
         self.delay_until = 0.0  # a random delay (~p_delay) holds the robot until then
+        self.cmd = None  # the cell of its last command: at rest, it starts the move when it can
+        self.blocked_on = None  # the (cell, target) move the interlock stopped (counted once)
 
 
 class FleetSim(object):
@@ -125,6 +130,7 @@ class FleetSim(object):
         self.invalid_commands = 0
         self.commands_received = 0
         self.last_tick = 0
+        self.tick_period = 0.5  # of the last command
         self.slips = 0
         self.slips_stayed = 0
         self.load_faults()
@@ -162,6 +168,8 @@ class FleetSim(object):
         self.diag_pub = rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=10)
         self.tf_pub = tf2_ros.TransformBroadcaster() if self.tf_enabled else None
         rospy.Subscriber("step_commands", StepCommandArray, self.on_commands, queue_size=10)
+        # Between ticks the manager sends the moves that became free on step_command_updates.
+        rospy.Subscriber("step_command_updates", StepCommandArray, self.on_updates, queue_size=100)
         rospy.Timer(rospy.Duration(1.0 / self.rate), self.on_timer)
         rospy.Timer(rospy.Duration(1.0), self.on_diagnostics)
 
@@ -268,18 +276,26 @@ class FleetSim(object):
     def delayed(self, rid, now):
         return now < self.robots[rid].delay_until
     def on_commands(self, msg):
+        """A tick's step commands: every robot's command. Random delays start here."""
+        self.take_commands(msg, tick=True)
+
+    def on_updates(self, msg):
+        """Between ticks: the commands of the robots given a new move (the others keep theirs)."""
+        self.take_commands(msg, tick=False)
+
+    def take_commands(self, msg, tick):
         now = rospy.get_time()
         with self.lock:
             if self.first_command is None:
                 self.first_command = now
             self.commands_received += 1
-            self.last_tick = msg.tick
+            if tick:
+                self.last_tick = msg.tick
+            self.tick_period = msg.tick_period
             self.advance(now)
             e = self.update_faults(now)
-            self.start_delays(now, msg.tick_period)
-            cells = [r.cell for r in self.robots]
-            targets = list(cells)
-            frozen = [False] * self.n
+            if tick:
+                self.start_delays(now, msg.tick_period)
             for c in msg.commands:
                 if c.robot_id >= self.n:
                     self.invalid_commands += 1
@@ -291,50 +307,80 @@ class FleetSim(object):
                 if not self.offline(r.id, now):
                     r.mode = c.mode
                     r.task_id = c.task_id
-                if not adjacent_or_same(r.cell, target) or not self.grid.is_free(*target):
+                if r.moving and target != r.dst:
+                    self.invalid_commands += 1
+                    rospy.logwarn_throttle(2.0, "fleet_sim: robot %d, moving to %s, ignores command to %s",
+                                           r.id, r.dst, target)
+                    continue
+                if not r.moving and (not adjacent_or_same(r.cell, target) or not self.grid.is_free(*target)):
                     self.invalid_commands += 1
                     rospy.logwarn_throttle(2.0, "fleet_sim: robot %d ignores command to %s from %s",
                                            r.id, target, r.cell)
+                    r.cmd = None  # keeps still
                     continue
-                targets[r.id] = target
-            for r in self.robots:
-                frozen[r.id] = (r.moving or self.stalled(r.id, now) or self.offline(r.id, now) or
-                                self.dead(r.id, now) or self.delayed(r.id, now) or r.id in self.absent)
-            # A robot still moving (a late or early tick) holds the cell it enters as well.
-            entering = [r.dst for r in self.robots if r.moving]
-            moves, blocked = resolve_moves(cells, targets, frozen, entering)
-            self.interlock_would_act += len(blocked)
-            if not self.interlock:  # every commanded move starts; what the interlock would stop is counted
-                moves = set(i for i in range(self.n) if not frozen[i] and targets[i] != cells[i])
-                blocked = set()
-            if self.slip.episodes:
-                slipped = False
-                for i in sorted(moves):
-                    ep = self.slip.pending_slip(i, e)
-                    if ep is None:
-                        continue
-                    claimed = set(cells) | set(targets) | set(entering)
-                    alt = slip_target(cells[i], targets[i], self.grid.is_free, claimed)
-                    rospy.logwarn("fleet_sim: robot %d slips: commanded %s -> %s, goes to %s", i, cells[i],
-                                  targets[i], alt if alt else "nowhere (stays)")
-                    targets[i] = alt if alt else cells[i]
-                    ep.left -= 1
-                    self.slips += 1
-                    self.slips_stayed += alt is None
-                    slipped = True
-                if slipped and self.interlock:  # a robot that stays now blocks the robots that were to follow it
-                    moves, blocked = resolve_moves(cells, targets, frozen, entering)
-            self.blocked_moves += len(blocked)
-            duration = max(0.01, self.move_fraction * msg.tick_period)
-            moving_pairs = set((o.src, o.dst) for o in self.robots if o.moving)
-            for i in moves:
-                r = self.robots[i]
-                if (targets[i], r.cell) in moving_pairs:  # two robots moving into each other's cells
-                    self.swaps += 1
-                moving_pairs.add((r.cell, targets[i]))
-                r.src, r.dst = r.cell, targets[i]
-                r.t0, r.duration, r.moving = now, max(0.01, duration * r.speed), True
-                r.yaw = math.atan2(-(r.dst[1] - r.src[1]), r.dst[0] - r.src[0])
+                r.cmd = target
+            self.start_moves(now, e)
+
+    def start_moves(self, now, e):
+        """Robots at rest that can move (not delayed, stalled, offline, dead or absent) start their
+        commanded move, unless the interlock (when on) stops it."""
+        for r in self.robots:  # OFFLINE at rest cancels its move (the manager gives the cell away)
+            if not r.moving and r.cmd is not None and self.offline(r.id, now):
+                r.cmd = None
+        pending = [r for r in self.robots if not r.moving and r.cmd is not None and r.cmd != r.cell]
+        if not pending:
+            return
+        cells = [r.cell for r in self.robots]
+        targets = list(cells)
+        for r in pending:
+            targets[r.id] = r.cmd
+        frozen = [(r.moving or self.stalled(r.id, now) or self.offline(r.id, now) or self.dead(r.id, now) or
+                   self.delayed(r.id, now) or r.id in self.absent) for r in self.robots]
+        if all(frozen[r.id] for r in pending):
+            return
+        # A robot still moving holds the cell it enters as well.
+        entering = [r.dst for r in self.robots if r.moving]
+        moves, blocked = resolve_moves(cells, targets, frozen, entering)
+        for i in blocked:  # each stopped move is counted once, not at every retry
+            r = self.robots[i]
+            if r.blocked_on != (r.cell, targets[i]):
+                r.blocked_on = (r.cell, targets[i])
+                self.interlock_would_act += 1
+                if self.interlock:
+                    self.blocked_moves += 1
+        if not self.interlock:  # every commanded move starts; what the interlock would stop is counted
+            moves = set(i for i in range(self.n) if not frozen[i] and targets[i] != cells[i])
+        if self.slip.episodes:
+            slipped = False
+            for i in sorted(moves):
+                ep = self.slip.pending_slip(i, e)
+                if ep is None:
+                    continue
+                claimed = set(cells) | set(targets) | set(entering)
+                alt = slip_target(cells[i], targets[i], self.grid.is_free, claimed)
+                rospy.logwarn("fleet_sim: robot %d slips: commanded %s -> %s, goes to %s", i, cells[i],
+                              targets[i], alt if alt else "nowhere (stays)")
+                targets[i] = alt if alt else cells[i]
+                self.robots[i].cmd = targets[i]  # the move it makes (or none): never retried
+                ep.left -= 1
+                self.slips += 1
+                self.slips_stayed += alt is None
+                slipped = True
+            if slipped and self.interlock:  # a robot that stays now blocks the robots that were to follow it
+                moves, _ = resolve_moves(cells, targets, frozen, entering)
+        duration = max(0.01, self.move_fraction * self.tick_period)
+        moving_pairs = set((o.src, o.dst) for o in self.robots if o.moving)
+        for i in moves:
+            r = self.robots[i]
+            if targets[i] == r.cell:
+                continue  # slipped and stayed
+            if (targets[i], r.cell) in moving_pairs:  # two robots moving into each other's cells
+                self.swaps += 1
+            moving_pairs.add((r.cell, targets[i]))
+            r.src, r.dst = r.cell, targets[i]
+            r.t0, r.duration, r.moving = now, max(0.01, duration * r.speed), True
+            r.blocked_on = None
+            r.yaw = math.atan2(-(r.dst[1] - r.src[1]), r.dst[0] - r.src[0])
 
     def pose_of(self, r, now):
         sx, sy = self.grid.world(*r.src)
@@ -354,7 +400,9 @@ class FleetSim(object):
         transforms = []
         with self.lock:
             self.advance(now)
-            self.update_faults(now)
+            e = self.update_faults(now)
+            if self.first_command is not None:
+                self.start_moves(now, e)  # a robot whose delay or stall is over makes its move now
             for r in self.robots:
                 if self.dead(r.id, now) or r.id in self.absent:
                     continue

@@ -6,8 +6,10 @@
 // broken ADG invariant aborts the run. A benchmark (prints figures), not a test; seconds per run,
 // so ideas can be tried here before the ROS benchmark (scripts/bench_delays.sh).
 //   delay_benchmark --map maps/warehouse-10-20-10-2-1.map --robots 300 --ticks 300 --p-delay 0.01
-//       --max-delay 20 --planner gd-rhcr --execution adg --speed 6 --seeds 1 --commit-horizon 1
-//       [--param key=value ...]   (planner parameters, e.g. --param guidance=none)
+//       --max-delay 20 --planner gd-rhcr --execution adg --speed 6 --seeds 1 --commit-horizon 2
+//       --between 1 [--param key=value ...]   (planner parameters, e.g. --param guidance=none)
+// --between 1 (default): moves are dispatched the moment the robots ahead have left (the node's
+// dispatch timer, Executor::advance after every substep); 0: at ticks only.
 // Each robot's goals come from its own random stream, so both runs of a seed give every robot
 // the same goal sequence. DELAY_BENCH_STATS=1 prints the planner's counters after each run.
 #include <cstdio>
@@ -27,7 +29,7 @@ namespace {
 
 struct Options {
   std::string map = "maps/warehouse-10-20-10-2-1.map", planner = "gd-rhcr", execution = "adg";
-  int robots = 300, ticks = 300, max_delay = 20, speed = 6, seeds = 1, commit_horizon = 1;
+  int robots = 300, ticks = 300, max_delay = 20, speed = 6, seeds = 1, commit_horizon = 2, between = 1;  // the node's defaults
   double p_delay = 0.01;
   std::vector<std::pair<std::string, std::string>> params;  // --param key=value, for the planner
 };
@@ -59,7 +61,14 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
     if (!out.stepped) r.error = "no step: " + out.skip_reason;
     else if (!out.plan_error.empty()) r.error = "plan rejected: " + out.plan_error;
     else if (cfg.mode == ExecutionMode::kAdg) r.error = ex.check_invariants();
-    if (r.error.empty()) r.error = fleet.execute(out, p_delay, o.max_delay);
+    DelayedFleet::Between between;
+    if (o.between)
+      between = [&ex](const std::vector<RobotRecord>& reports) {
+        std::vector<std::pair<int, gdrhcr::Cell>> cmds;
+        for (int rb : ex.advance(reports)) cmds.emplace_back(rb, ex.command(rb));
+        return cmds;
+      };
+    if (r.error.empty()) r.error = fleet.execute(out, p_delay, o.max_delay, between);
     if (!r.error.empty()) {
       r.error = "tick " + std::to_string(t) + ": " + r.error;
       return r;
@@ -93,13 +102,14 @@ int main(int argc, char** argv) {
     else if (k == "--speed") o.speed = std::atoi(v.c_str());
     else if (k == "--seeds") o.seeds = std::atoi(v.c_str());
     else if (k == "--commit-horizon") o.commit_horizon = std::atoi(v.c_str());
+    else if (k == "--between") o.between = std::atoi(v.c_str());
     else if (k == "--param" && v.find('=') != std::string::npos)
       o.params.emplace_back(v.substr(0, v.find('=')), v.substr(v.find('=') + 1));
     else if (k == "--p-delay") o.p_delay = std::atof(v.c_str());
     else {
       std::fprintf(stderr,
                    "unknown option %s (--map --planner --execution --robots --ticks --p-delay --max-delay --speed "
-                   "--seeds --commit-horizon --param key=value)\n",
+                   "--seeds --commit-horizon --between 0|1 --param key=value)\n",
                    k.c_str());
       return 2;
     }
@@ -113,9 +123,10 @@ int main(int argc, char** argv) {
   try {
     parse_execution_mode(o.execution);
     const LoadedMap map = load_map(o.map, 1.0);
-    std::printf("map %s, %d robots, planner %s, execution %s (commit horizon %d), %d ticks, moves take %.1f tick, "
+    std::printf("map %s, %d robots, planner %s, execution %s (commit horizon %d, dispatch %s), %d ticks, moves take %.1f tick, "
                 "delays p %.3f per tick of 1..%d ticks, random goals\n",
-                o.map.c_str(), o.robots, o.planner.c_str(), o.execution.c_str(), o.commit_horizon, o.ticks,
+                o.map.c_str(), o.robots, o.planner.c_str(), o.execution.c_str(), o.commit_horizon,
+                o.between ? "on arrival" : "at ticks", o.ticks,
                 o.speed / double(SimRobot::kSub), o.p_delay, o.max_delay);
     std::printf("%5s %14s %14s %7s %16s %16s %12s %14s\n", "seed", "goals/tick no", "goals/tick p", "ratio",
                 "delayed robots", "waiting no / p", "held moves", "moves no / p");

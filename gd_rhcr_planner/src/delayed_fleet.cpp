@@ -65,31 +65,48 @@ std::vector<std::vector<Cell>> DelayedFleet::goals(int& reached) {
   return out;
 }
 
-std::string DelayedFleet::execute(const TickOutput& out, double p_delay, int max_delay_ticks) {
+// Takes robot i's command c: a moving robot must be told the cell it is entering; a robot at rest
+// remembers it and starts the move as soon as it is not delayed (see start_moves).
+std::string DelayedFleet::take_command(size_t i, Cell c) {
+  SimRobot& s = robots_[i];
+  if (c == kNoCell || s.missing || s.silent) return "";
+  if (s.moving) {
+    if (c != s.dst)
+      return "robot " + std::to_string(i) + " is moving to " + g_.describe(s.dst) + " but was commanded " + g_.describe(c);
+    return "";
+  }
+  if (c != s.cell && !g_.step_allowed(s.cell, c))
+    return "robot " + std::to_string(i) + ": " + g_.describe(s.cell) + " -> " + g_.describe(c);
+  s.cmd = c;
+  return "";
+}
+
+// Robots at rest, not delayed, with a command to a neighbour start it (a robot that will not move,
+// offline or reporting a fake cell, does not).
+void DelayedFleet::start_moves() {
+  for (SimRobot& s : robots_) {
+    if (s.offline && !s.moving) s.cmd = kNoCell;  // OFFLINE at rest cancels its move
+    if (s.missing || s.silent || s.offline || s.fake != kNoCell || s.moving || s.delay > 0) continue;
+    if (s.cmd == kNoCell || s.cmd == s.cell) continue;
+    s.moving = true;
+    s.dst = s.cmd;
+    s.left = s.speed;
+    ++s.moves;
+  }
+}
+
+std::string DelayedFleet::execute(const TickOutput& out, double p_delay, int max_delay_ticks, const Between& between) {
   std::uniform_real_distribution<double> u(0, 1);
   std::uniform_int_distribution<int> d(1, std::max(1, max_delay_ticks));
   for (size_t i = 0; i < robots_.size(); ++i) {
     SimRobot& s = robots_[i];
     if (s.missing || s.silent) continue;
     if (s.delay == 0 && p_delay > 0 && u(delay_rng_) < p_delay) s.delay = d(delay_rng_) * SimRobot::kSub;
-    const Cell c = out.command[i];
-    if (c == kNoCell) continue;
-    if (s.moving) {
-      if (c != s.dst)
-        return "robot " + std::to_string(i) + " is moving to " + g_.describe(s.dst) + " but was commanded " +
-               g_.describe(c);
-      continue;
-    }
-    if (s.offline || s.fake != kNoCell) continue;  // will not move
-    if (c == s.cell || s.delay > 0) continue;
-    if (!g_.step_allowed(s.cell, c))
-      return "robot " + std::to_string(i) + ": " + g_.describe(s.cell) + " -> " + g_.describe(c);
-    s.moving = true;
-    s.dst = c;
-    s.left = s.speed;
-    ++s.moves;
+    std::string err = take_command(i, out.command[i]);
+    if (!err.empty()) return err;
   }
   for (int k = 0; k < SimRobot::kSub; ++k) {
+    start_moves();
     for (SimRobot& s : robots_) {
       if (s.silent) continue;
       if (s.delay > 0) {
@@ -103,6 +120,11 @@ std::string DelayedFleet::execute(const TickOutput& out, double p_delay, int max
     }
     std::string err = check_physical();
     if (!err.empty()) return err;
+    if (between && k + 1 < SimRobot::kSub)
+      for (const auto& [i, c] : between(records())) {
+        err = take_command(static_cast<size_t>(i), c);
+        if (!err.empty()) return err;
+      }
   }
   return "";
 }

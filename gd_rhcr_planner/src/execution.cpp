@@ -112,17 +112,8 @@ void Executor::reconcile_adg(const std::vector<RobotRecord>& robots, TickOutput&
         t.path.clear();
         need_resync = true;
       }
-    } else if (t.dispatched && x == t.path.front()) {  // arrival: it has left its cell
-      auto it = visits_.find(t.cell);
-      if (it != visits_.end()) {
-        auto pos = std::find(it->second.begin(), it->second.end(), r);
-        if (pos != it->second.end()) it->second.erase(pos);
-        if (it->second.empty()) visits_.erase(it);
-      }
-      t.cell = x;
-      t.path.pop_front();
-      t.dispatched = false;
-      t.claimed = kNoCell;
+    } else if (t.dispatched && x == t.path.front()) {
+      arrive(r);
     } else {  // a cell it was not commanded into
       // A slip (it ended in a free neighbour of the cell it was in) is taken as the truth;
       // a cell another robot holds, or a jump, is not: the robot is an obstacle at both cells.
@@ -172,6 +163,57 @@ void Executor::reconcile_adg(const std::vector<RobotRecord>& robots, TickOutput&
   }
 }
 
+// Robot r reports arrival in its dispatched cell: it has left its cell, which the next robot in
+// that cell's queue may now enter.
+void Executor::arrive(int r) {
+  Track& t = tracks_[r];
+  auto it = visits_.find(t.cell);
+  if (it != visits_.end()) {
+    auto pos = std::find(it->second.begin(), it->second.end(), r);
+    if (pos != it->second.end()) it->second.erase(pos);
+    if (it->second.empty()) visits_.erase(it);
+  }
+  t.cell = t.path.front();
+  t.path.pop_front();
+  t.dispatched = false;
+  t.claimed = kNoCell;
+}
+
+std::vector<int> Executor::advance(const std::vector<RobotRecord>& robots, const std::vector<uint8_t>* hold) {
+  std::vector<int> changed;
+  if (cfg_.mode != ExecutionMode::kAdg || static_cast<int>(robots.size()) != num_robots()) return changed;
+  bool arrived = false;
+  for (int r = 0; r < num_robots(); ++r) {
+    Track& t = tracks_[r];
+    const RobotRecord& rec = robots[r];
+    if (!t.active || t.health != RobotHealth::kOk || !t.dispatched || !rec.reported || rec.silent ||
+        rec.reported_offline || rec.moving || rec.cell != t.path.front())
+      continue;
+    arrive(r);
+    t.reported_moving = false;
+    arrived = true;
+  }
+  if (!arrived) return changed;
+  hold_ = hold;
+  for (int r = 0; r < num_robots(); ++r) {
+    const Track& t = tracks_[r];
+    if (t.active && t.health == RobotHealth::kOk && !t.dispatched && !t.path.empty() && !holds(r)) changed.push_back(r);
+  }
+  TickOutput unused;
+  // A move dispatched between ticks counts as dispatched in the coming tick: it is late only if
+  // it is not made by the tick after.
+  dispatch_ready(unused, ticks_ + 1);
+  changed.erase(std::remove_if(changed.begin(), changed.end(), [&](int r) { return !tracks_[r].dispatched; }),
+                changed.end());
+  hold_ = nullptr;
+  return changed;
+}
+
+Cell Executor::command(int r) const {
+  const Track& t = tracks_[r];
+  return t.dispatched ? t.path.front() : t.cell;
+}
+
 // Drops every commitment that was not dispatched yet and rebuilds the cells' visit queues from
 // what robots are in and what they were commanded into.
 void Executor::resync() {
@@ -190,7 +232,7 @@ void Executor::resync() {
   }
 }
 
-int Executor::dispatch_ready(TickOutput& out) {
+int Executor::dispatch_ready(TickOutput& out, uint64_t stamp) {
   int n = 0;
   for (int r = 0; r < num_robots(); ++r) {
     Track& t = tracks_[r];
@@ -198,7 +240,7 @@ int Executor::dispatch_ready(TickOutput& out) {
     auto it = visits_.find(t.path.front());
     if (it != visits_.end() && !it->second.empty() && it->second.front() == r) {
       t.dispatched = true;
-      t.dispatched_at = ticks_;
+      t.dispatched_at = stamp;
       ++n;
     }
   }
@@ -407,9 +449,9 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
   out.end_state.assign(n, kNoCell);
   if (cfg_.mode == ExecutionMode::kAdg) {
     reconcile_adg(robots, out);
-    dispatch_ready(out);
+    dispatch_ready(out, ticks_);
     plan_and_commit(goals, planner, out);
-    dispatch_ready(out);
+    dispatch_ready(out, ticks_);
   } else {
     reconcile_lockstep(robots, out);
     std::map<Cell, int> at;

@@ -96,6 +96,7 @@ class PlannerNode {
   void on_goal(DeliveryServer::GoalHandle gh);
   void on_cancel_goal(DeliveryServer::GoalHandle gh);
   void on_tick(const ros::TimerEvent& ev);
+  void on_dispatch(const ros::TimerEvent& ev);
   // Issue 14: operator services, live tuning, diagnostic_updater.
   bool on_set_paused(gd_rhcr_msgs::SetPaused::Request& req, gd_rhcr_msgs::SetPaused::Response& res);
   bool on_emergency_stop(gd_rhcr_msgs::EmergencyStop::Request& req, gd_rhcr_msgs::EmergencyStop::Response& res);
@@ -121,7 +122,8 @@ class PlannerNode {
   gd_rhcr_msgs::GroupArray group_message(const TickOutput& exec, const gdrhcr::Planner* primary,
                                          std::vector<int>& group_of) const;
   void count_outcome_locked(const TickOutput& exec, uint64_t tick);
-  void publish_commands_locked(const std::vector<Cell>& command, uint64_t tick, const ros::Time& stamp);
+  void publish_commands_locked(const std::vector<Cell>& command, uint64_t tick, const ros::Time& stamp,
+                               bool between_ticks = false);
   double record_timing_locked(std::chrono::steady_clock::time_point wall0, uint64_t tick,
                               const gdrhcr::StepReport& report);
   void publish_stats_locked(const TickOutput& exec, const gdrhcr::Planner* primary,
@@ -164,7 +166,9 @@ class PlannerNode {
   uint64_t fallback_ticks_ = 0, late_ticks_ = 0, planner_errors_ = 0, store_errors_ = 0;
   // Issue 13: the execution layer (ADG or lock-step), used by the tick thread only.
   std::string execution_ = "adg";
-  int commit_horizon_ = 1;
+  int commit_horizon_ = 2;
+  double dispatch_rate_ = 20.0;  // Hz: arrivals checked between ticks (adg), 0 = at ticks only
+  uint64_t early_dispatches_ = 0;  // moves dispatched between ticks
   std::unique_ptr<Executor> executor_;
   double first_report_s_ = 0;  // when the first robot reported (missing robots are waited for a while)
   std::deque<double> tick_stamps_;  // wall times of recent published ticks, for the rate
@@ -193,13 +197,13 @@ class PlannerNode {
   uint64_t reconfigures_ = 0;
   gdrhcr::Params base_params_;  // planner parameters from the start, without the reconfigurable ones
 
-  ros::Publisher commands_pub_, status_pub_, map_pub_, mapd_pub_, markers_pub_, stats_pub_,
+  ros::Publisher commands_pub_, updates_pub_, status_pub_, map_pub_, mapd_pub_, markers_pub_, stats_pub_,
       groups_pub_;
   std::vector<ros::Publisher> robot_pubs_;
   ros::Subscriber states_sub_, tasks_sub_;
   ros::ServiceServer submit_srv_, cancel_srv_, list_srv_, pause_srv_, estop_srv_;
   std::unique_ptr<DeliveryServer> action_;
-  ros::Timer tick_timer_, diag_timer_;
+  ros::Timer tick_timer_, diag_timer_, dispatch_timer_;
   ros::WallTime started_ = ros::WallTime::now();
 };
 
@@ -221,7 +225,8 @@ void PlannerNode::load_parameters() {
   pnh_.param("plan_deadline", plan_deadline_, 0.0);
   pnh_.param("offline_timeout", offline_timeout_, 2.0);
   pnh_.param("execution", execution_, std::string("adg"));    // issue 13: adg | lockstep
-  pnh_.param("commit_horizon", commit_horizon_, 1);
+  pnh_.param("commit_horizon", commit_horizon_, 2);
+  pnh_.param("dispatch_rate", dispatch_rate_, 20.0);
   pnh_.param("show_goal_lines", show_goal_lines_, false);
   pnh_.param("dispatcher", dispatcher_name_, std::string("batch"));
   parse_dispatch_policy(dispatcher_name_);  // throws naming a bad value
@@ -238,6 +243,8 @@ void PlannerNode::load_parameters() {
   if (!(plan_deadline_ > 0 && plan_deadline_ <= 1.0 / tick_rate_))
     throw gdrhcr::ParamError("~plan_deadline must be in (0, 1/tick_rate] seconds (0 = 0.7/tick_rate)");
   if (!(offline_timeout_ > 0)) throw gdrhcr::ParamError("~offline_timeout must be > 0 seconds");
+  if (!(dispatch_rate_ >= 0 && dispatch_rate_ <= 1000))
+    throw gdrhcr::ParamError("~dispatch_rate must be in [0, 1000] Hz (0 = moves are dispatched at ticks only)");
   if (num_robots_ < 1) throw gdrhcr::ParamError("~num_robots must be >= 1");
   if (!(cell_size_ > 0)) throw gdrhcr::ParamError("~cell_size must be > 0 metres");
   if (dist_budget_mb_ < 1) throw gdrhcr::ParamError("~dist_budget_mb must be >= 1");
@@ -346,6 +353,8 @@ void PlannerNode::init() {
            mapd_.deliveries.size());
 
   commands_pub_ = nh_.advertise<gd_rhcr_msgs::StepCommandArray>("step_commands", 10);
+  // Between ticks (adg): the commands of the robots just given a move, nobody else's.
+  updates_pub_ = nh_.advertise<gd_rhcr_msgs::StepCommandArray>("step_command_updates", 100);
   status_pub_ = nh_.advertise<gd_rhcr_msgs::TaskStatus>("task_status", 1000);
   map_pub_ = nh_.advertise<nav_msgs::OccupancyGrid>("map", 1, true);
   mapd_pub_ = nh_.advertise<gd_rhcr_msgs::MapdCells>("mapd_cells", 1, true);
@@ -401,6 +410,12 @@ void PlannerNode::start_timers(ros::CallbackQueue* tick_queue) {
   ros::TimerOptions opts(ros::Duration(1.0 / tick_rate_),
                          [this](const ros::TimerEvent& ev) { on_tick(ev); }, tick_queue);
   tick_timer_ = nh_.createTimer(opts);
+  if (dispatch_rate_ > 0 && executor_->config().mode == ExecutionMode::kAdg) {
+    // On the tick thread, so it never runs during a tick (the executor is the tick thread's).
+    ros::TimerOptions d(ros::Duration(1.0 / dispatch_rate_),
+                        [this](const ros::TimerEvent& ev) { on_dispatch(ev); }, tick_queue);
+    dispatch_timer_ = nh_.createTimer(d);
+  }
   diag_timer_ = nh_.createTimer(ros::Duration(0.25), [this](const ros::TimerEvent&) { updater_->update(); });
   // Live tuning; the first callback brings the server's starting values (the same parameters).
   reconfigure_ = std::make_unique<dynamic_reconfigure::Server<gd_rhcr_planner::PlannerConfig>>(reconfigure_mutex_, pnh_);
@@ -639,6 +654,27 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
   if (retired) ROS_DEBUG("tick %lu: previous planner retired", (unsigned long)in.tick);
 }
 
+// Between ticks (adg): robots that reported arrival let the robots queued behind them go at once
+// (Executor::advance); only their new commands are published, on step_command_updates (and their
+// own topics), with the last tick's number.
+void PlannerNode::on_dispatch(const ros::TimerEvent& ev) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (tick_ == 0) return;
+  std::vector<RobotRecord> robots;
+  std::vector<uint8_t> held(fleet_->num_robots(), 0);
+  robots.reserve(fleet_->num_robots());
+  for (int r = 0; r < fleet_->num_robots(); ++r) {
+    robots.push_back(fleet_->robot(r));
+    held[r] = operator_->holds(r);
+  }
+  const std::vector<int> changed = executor_->advance(robots, &held);
+  if (changed.empty()) return;
+  early_dispatches_ += changed.size();
+  std::vector<Cell> command(fleet_->num_robots(), gdrhcr::kNoCell);
+  for (int r : changed) command[r] = executor_->command(r);
+  publish_commands_locked(command, tick_, ev.current_real.isZero() ? ros::Time::now() : ev.current_real, true);
+}
+
 // The start of a tick: a pending reconfigure, silent robots, the wait for robots that never
 // reported, task dispatch, and a copy of what the execution layer needs.
 PlannerNode::TickInput PlannerNode::gather_tick_locked(std::unique_ptr<DeadlinePlanner>& retired) {
@@ -726,8 +762,10 @@ void PlannerNode::count_outcome_locked(const TickOutput& exec, uint64_t tick) {
 }
 
 // Every robot's command (a robot that never reported gets none), on the fleet topic and, if
-// enabled, on its own topic.
-void PlannerNode::publish_commands_locked(const std::vector<Cell>& command, uint64_t tick, const ros::Time& stamp) {
+// enabled, on its own topic. Between ticks only the robots given a new move are in `command`,
+// and the fleet topic is step_command_updates.
+void PlannerNode::publish_commands_locked(const std::vector<Cell>& command, uint64_t tick, const ros::Time& stamp,
+                                          bool between_ticks) {
   const auto& grid = map_->grid;
   gd_rhcr_msgs::StepCommandArray cmds;
   cmds.header.stamp = stamp;
@@ -747,9 +785,13 @@ void PlannerNode::publish_commands_locked(const std::vector<Cell>& command, uint
     c.mode = operator_->mode(r, fleet_->command_mode(r));
     c.task_id = fleet_->task_of(r);
   }
-  commands_pub_.publish(cmds);
-  tick_freq_->tick();
-  tick_stamp_->tick(cmds.header.stamp);
+  if (between_ticks) {
+    updates_pub_.publish(cmds);
+  } else {
+    commands_pub_.publish(cmds);
+    tick_freq_->tick();
+    tick_stamp_->tick(cmds.header.stamp);
+  }
   for (const auto& c : cmds.commands)
     if (c.robot_id < robot_pubs_.size()) robot_pubs_[c.robot_id].publish(c);
 }
@@ -919,6 +961,9 @@ void PlannerNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
   s.add("skipped ticks", skipped_);
   s.add("rejected plans", invalid_plans_);
   s.add("ignored robot reports", bad_reports_);
+  s.add("execution", execution_ + ", commit horizon " + std::to_string(commit_horizon_) +
+                         (dispatch_timer_.isValid() ? ", dispatch on arrival" : ", dispatch at ticks"));
+  s.add("moves dispatched between ticks", early_dispatches_);
   // Memory that grows by design up to a bound: the distance rows (dist_budget_mb) and the
   // finished tasks kept for list_tasks (the newest 10000).
   s.add("distance rows cached", dist_->cached_rows());

@@ -192,7 +192,7 @@ const Grid& small_warehouse() {
 // Runs `ticks` ticks with delays, then `tail` ticks without.
 SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int ticks, int tail, double p_delay,
                     int max_delay, const std::function<void(int, DelayedFleet&)>& faults = nullptr,
-                    ExecutionMode mode = ExecutionMode::kAdg) {
+                    ExecutionMode mode = ExecutionMode::kAdg, int commit_horizon = 1, bool between = false) {
   const Grid& g = small_warehouse();
   gdrhcr::DistTable dist(g);
   gdrhcr::Params params, none;
@@ -201,8 +201,16 @@ SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int t
                           gdrhcr::make_planner("pibt", none, g, n, seed));
   ExecutorConfig cfg;
   cfg.mode = mode;
+  cfg.commit_horizon = commit_horizon;
   Executor ex(g, dist, n, cfg);
   DelayedFleet sim(g, n, seed);
+  // Dispatch on arrival: the executor sees the robots' reports after every substep.
+  DelayedFleet::Between on_arrival = [&ex](const std::vector<RobotRecord>& reports) {
+    std::vector<std::pair<int, Cell>> cmds;
+    for (int r : ex.advance(reports)) cmds.emplace_back(r, ex.command(r));
+    EXPECT_EQ(ex.check_invariants(), "");
+    return cmds;
+  };
   SimResult res;
   res.moves_tail.assign(n, 0);
   res.health_ticks.assign(n, std::vector<int>(5, 0));
@@ -226,7 +234,7 @@ SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int t
     }
     std::vector<int> before(n);
     for (int i = 0; i < n; ++i) before[i] = sim.robots()[i].moves;
-    const std::string bad = sim.execute(out, t < ticks ? p_delay : 0.0, max_delay);
+    const std::string bad = sim.execute(out, t < ticks ? p_delay : 0.0, max_delay, between ? on_arrival : nullptr);
     if (!bad.empty()) {
       ADD_FAILURE() << bad;
       ADD_FAILURE() << "planner " << planner_name << " seed " << seed << " tick " << t << " queue at the collision: "
@@ -283,6 +291,20 @@ TEST(ExecutorAdg, RandomDelaysNeverCollideNorDeadlock_GdRhcr) {
   }
 }
 
+// The same with moves dispatched the moment the robots ahead have left (Executor::advance between
+// ticks) and two moves committed ahead, the node's default.
+TEST(ExecutorAdg, RandomDelaysNeverCollideNorDeadlock_DispatchOnArrival) {
+  for (uint64_t seed = 1; seed <= seeds(20); ++seed) {
+    for (const char* planner : {"pibt", "gd-rhcr"}) {
+      if (std::string(planner) == "gd-rhcr" && seed > 6) continue;
+      const SimResult r = run_fleet(planner, 30, seed, 150, 60, 0.05, 20, nullptr, ExecutionMode::kAdg, 2, true);
+      if (HasFailure()) return;
+      EXPECT_GT(r.goals_tail, 0) << planner << " seed " << seed;
+      EXPECT_LE(r.max_wait_tail, 30) << planner << " seed " << seed;
+    }
+  }
+}
+
 // Bad robots: robot 0 never reports (not on the floor), robot 1 falls silent mid-move for good,
 // robot 2 goes offline at tick 40 and comes back at 90, robot 3 reports another robot's cell,
 // three or more cells away, for ten ticks (then its own again), robot 5 slips into a free neighbour. The rest keeps moving and
@@ -333,6 +355,43 @@ TEST(ExecutorAdg, BadRobotsBecomeObstaclesAndTheRestKeepsMoving) {
     EXPECT_GT(res.health_ticks[1][int(RobotHealth::kSilent)], 100);
     EXPECT_GE(res.health_ticks[2][int(RobotHealth::kOffline)], 40);
     EXPECT_GT(res.health_ticks[3][int(RobotHealth::kInconsistent)], 0) << "seed " << seed;
+  }
+}
+
+// Between ticks a robot behind another is sent into its cell once that robot reports arrival in
+// the next cell (not while it is still moving), and a robot on hold is not.
+TEST(ExecutorAdg, ARobotBehindGoesAsSoonAsTheOneAheadHasArrived) {
+  const Grid g = Grid::from_rows({"......"});
+  gdrhcr::DistTable dist(g);
+  FnPlanner* fn;
+  auto planner = make_fn_planner(g, 2, &fn);
+  for (bool on_hold : {false, true}) {
+    Executor ex(g, dist, 2, ExecutorConfig{});
+    std::vector<RobotRecord> robots{at(g, 2, 0), at(g, 1, 0)};
+    fn->fn = [&](const gdrhcr::WorldView&, std::vector<Cell>& next) {
+      next[0] = g.cell(3, 0);
+      next[1] = g.cell(2, 0);  // follows robot 0
+    };
+    auto out = ex.tick(robots, stay_goals(robots), *planner, false);
+    EXPECT_EQ(out.command[0], g.cell(3, 0));
+    EXPECT_EQ(out.command[1], g.cell(1, 0)) << "robot 0 is still in (2,0)";
+    EXPECT_EQ(out.waiting, 1);
+    std::vector<uint8_t> hold{0, on_hold};
+    robots[0].moving = true;
+    EXPECT_TRUE(ex.advance(robots, &hold).empty()) << "robot 0 has not left (2,0) yet";
+    EXPECT_EQ(ex.command(1), g.cell(1, 0));
+    robots[0] = at(g, 3, 0);  // arrived
+    const std::vector<int> sent = ex.advance(robots, &hold);
+    EXPECT_EQ(ex.cell(0), g.cell(3, 0));
+    EXPECT_EQ(ex.check_invariants(), "");
+    if (on_hold) {
+      EXPECT_TRUE(sent.empty());
+      EXPECT_EQ(ex.command(1), g.cell(1, 0));
+    } else {
+      EXPECT_EQ(sent, std::vector<int>{1});
+      EXPECT_EQ(ex.command(1), g.cell(2, 0));
+      EXPECT_TRUE(ex.advance(robots, &hold).empty()) << "nothing new: nothing sent twice";
+    }
   }
 }
 

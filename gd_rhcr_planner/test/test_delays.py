@@ -5,7 +5,8 @@ Robots with random delays, different speeds, no interlock and one robot absent: 
 no two robots share a cell, swap cells or jump (every pair of consecutive robot_states), fleet_sim
 counts no collision, no swap and no move its interlock would have stopped (and delays did happen),
 the absent robot gets no command while the others keep moving and deliver at least ~deliveries
-tasks, and every accepted task is delivered or still open in list_tasks (none lost).
+tasks, every accepted task is delivered or still open in list_tasks (none lost), and moves were
+also sent between ticks (step_command_updates: the moment the robots ahead had left).
 """
 import threading
 import time
@@ -29,11 +30,13 @@ class DelaysTest(unittest.TestCase):
         self.moved = set()
         self.commanded = set()
         self.steps = 0
+        self.updates = 0
         self.accepted = set()
         self.finished = {}
         self.sim = {}
         rospy.Subscriber("robot_states", RobotStateArray, self.on_states, queue_size=100)
         rospy.Subscriber("step_commands", StepCommandArray, self.on_steps, queue_size=100)
+        rospy.Subscriber("step_command_updates", StepCommandArray, self.on_updates, queue_size=100)
         rospy.Subscriber("task_status", TaskStatus, self.on_status, queue_size=1000)
         rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diag, queue_size=100)
 
@@ -59,6 +62,12 @@ class DelaysTest(unittest.TestCase):
     def on_steps(self, msg):
         with self.lock:
             self.steps += 1
+            for c in msg.commands:
+                self.commanded.add(c.robot_id)
+
+    def on_updates(self, msg):
+        with self.lock:
+            self.updates += len(msg.commands)
             for c in msg.commands:
                 self.commanded.add(c.robot_id)
 
@@ -108,6 +117,7 @@ class DelaysTest(unittest.TestCase):
             self.assertEqual(int(self.sim.get("swaps", -1)), 0)
             self.assertEqual(int(self.sim.get("invalid commands", -1)), 0)
             self.assertNotIn(absent, self.commanded, "the absent robot was commanded")
+            self.assertGreater(self.updates, 0, "no move was sent between ticks")
             self.assertGreaterEqual(len(self.moved), 8, "robots that moved: %s" % sorted(self.moved))
             delivered = [t for t, s in self.finished.items() if s == TaskStatus.DELIVERED]
             self.assertGreaterEqual(len(delivered), want)

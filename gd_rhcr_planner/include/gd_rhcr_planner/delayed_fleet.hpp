@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
@@ -27,6 +28,7 @@ struct SimRobot {
   bool missing = false, silent = false, offline = false;
   gdrhcr::Cell fake = gdrhcr::kNoCell;  // reports this cell instead of its own (an inconsistent report)
   gdrhcr::Cell goal = gdrhcr::kNoCell;
+  gdrhcr::Cell cmd = gdrhcr::kNoCell;  // the last command (a robot at rest starts it when it can)
   int goals_reached = 0;
   int moves = 0;
 };
@@ -44,10 +46,15 @@ class DelayedFleet {
   // `reached`) and gets a new random one. A goal under a robot that will not move is replaced
   // (as the fleet requeues tasks under offline robots).
   std::vector<std::vector<gdrhcr::Cell>> goals(int& reached);
+  // Commands sent between ticks, given the robots' reports after a substep: (robot, cell) pairs
+  // (Executor::advance and Executor::command).
+  using Between = std::function<std::vector<std::pair<int, gdrhcr::Cell>>(const std::vector<RobotRecord>&)>;
   // Applies the commands and runs one tick of motion with delays (p_delay per robot and tick,
-  // 1..max_delay_ticks ticks). Returns "" or what went wrong: a bad command (a moving robot told
+  // 1..max_delay_ticks ticks); a robot at rest starts its commanded move whenever it is not
+  // delayed. With `between`, the robots' reports go to it after every substep and the commands it
+  // returns are taken at once. Returns "" or what went wrong: a bad command (a moving robot told
   // another cell, a move to a non-neighbour) or two robots in one cell (collision_cell says where).
-  std::string execute(const TickOutput& out, double p_delay, int max_delay_ticks);
+  std::string execute(const TickOutput& out, double p_delay, int max_delay_ticks, const Between& between = {});
   // Robots delayed right now.
   int delayed() const;
 
@@ -55,6 +62,8 @@ class DelayedFleet {
 
  private:
   gdrhcr::Cell random_cell(size_t robot);
+  std::string take_command(size_t i, gdrhcr::Cell c);
+  void start_moves();
   std::string check_physical();
 
   const gdrhcr::Grid& g_;

@@ -9,7 +9,7 @@
 //   new cell is appended to its committed path and to the cell's queue of visits, in plan order.
 //   A robot is commanded its next committed cell (the move is "dispatched") as soon as every robot
 //   that the plan sends through that cell earlier has left it (reported arrival in its next cell);
-//   no lock-step. A dispatched cell stays reserved for the robot until it reports arrival, and a
+//   no lock-step: advance() does this between ticks too, as the arrival reports come in. A dispatched cell stays reserved for the robot until it reports arrival, and a
 //   commitment is never changed by a replan, so any pattern of delays gives no collision, and,
 //   since commitments follow one global plan order with cycles (rotations) turned into waits, no
 //   deadlock. A robot with `commit_horizon` moves committed and not finished (the one it is
@@ -88,6 +88,15 @@ class Executor {
                   DeadlinePlanner& planner, bool proceed_without_missing,
                   const std::vector<uint8_t>* hold = nullptr);
 
+  // ADG, between ticks: takes the robots' arrival reports (a robot at rest in the cell it was
+  // commanded into) and dispatches the moves that this makes ready, at once rather than at the
+  // next tick (a robot behind another enters its cell as soon as it has left). Any other report
+  // (a slip, a change of health) waits for the next tick. Returns the robots given a new move;
+  // command(r) is the cell to send each. Lock-step: does nothing.
+  std::vector<int> advance(const std::vector<RobotRecord>& robots, const std::vector<uint8_t>* hold = nullptr);
+  // ADG: the cell robot r is commanded now (its dispatched cell, else its own cell).
+  Cell command(int r) const;
+
   const ExecutorConfig& config() const { return cfg_; }
   void set_plan_deadline(double s) { cfg_.plan_deadline_s = s; }
   int num_robots() const { return static_cast<int>(tracks_.size()); }
@@ -122,7 +131,8 @@ class Executor {
   void reconcile_adg(const std::vector<RobotRecord>& robots, TickOutput& out);
   void reconcile_lockstep(const std::vector<RobotRecord>& robots, TickOutput& out);
   void resync();
-  int dispatch_ready(TickOutput& out);
+  void arrive(int r);
+  int dispatch_ready(TickOutput& out, uint64_t stamp);
   bool holds(int r) const { return hold_ && r < static_cast<int>(hold_->size()) && (*hold_)[r]; }
   int holder_of(Cell c, int except) const;
   void add_blocked_cells(int r, std::vector<Cell>& blocked) const;
