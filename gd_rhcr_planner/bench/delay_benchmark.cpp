@@ -9,7 +9,8 @@
 //       --max-delay 20 --planner gd-rhcr --execution adg --speed 6 --seeds 1 --commit-horizon 2
 //       --between 1 [--param key=value ...]   (planner parameters, e.g. --param guidance=none)
 // --between 1 (default): moves are dispatched the moment the robots ahead have left (the node's
-// dispatch timer, Executor::advance after every substep); 0: at ticks only.
+// dispatch timer, Executor::advance after every substep); 0: at ticks only. --revoke 1 (default):
+// moves queued behind late robots are taken back and planned again (ExecutorConfig); 0: kept.
 // Each robot's goals come from its own random stream, so both runs of a seed give every robot
 // the same goal sequence. DELAY_BENCH_STATS=1 prints the planner's counters after each run.
 #include <cstdio>
@@ -29,7 +30,7 @@ namespace {
 
 struct Options {
   std::string map = "maps/warehouse-10-20-10-2-1.map", planner = "gd-rhcr", execution = "adg";
-  int robots = 300, ticks = 300, max_delay = 20, speed = 6, seeds = 1, commit_horizon = 2, between = 1;  // the node's defaults
+  int robots = 300, ticks = 300, max_delay = 20, speed = 6, seeds = 1, commit_horizon = 2, between = 1, revoke = 1;  // the node's defaults
   double p_delay = 0.01;
   std::vector<std::pair<std::string, std::string>> params;  // --param key=value, for the planner
 };
@@ -37,6 +38,7 @@ struct Options {
 struct Result {
   int goals = 0;
   double delayed = 0, waiting = 0, held = 0, moves = 0;  // per tick
+  long revoked = 0;
   std::string error;
 };
 
@@ -52,6 +54,7 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
   ExecutorConfig cfg;
   cfg.mode = parse_execution_mode(o.execution);
   cfg.commit_horizon = o.commit_horizon;
+  cfg.revoke_behind_late = o.revoke != 0;
   Executor ex(g, dist, o.robots, cfg);
   DelayedFleet fleet(g, o.robots, seed, o.speed, o.speed);
   Result r;
@@ -76,10 +79,12 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
     r.delayed += fleet.delayed();
     r.waiting += out.waiting;
     r.held += out.held;
+    r.revoked += out.revoked;
   }
   for (const SimRobot& s : fleet.robots()) r.moves += s.moves;
   planner.wait_idle();
-  if (std::getenv("DELAY_BENCH_STATS")) std::fprintf(stderr, "p %.3f: %s\n", p_delay, planner.primary().stats().dump().c_str());
+  if (std::getenv("DELAY_BENCH_STATS"))
+    std::fprintf(stderr, "p %.3f: revoked %ld; %s\n", p_delay, r.revoked, planner.primary().stats().dump().c_str());
   r.delayed /= o.ticks;
   r.waiting /= o.ticks;
   r.held /= o.ticks;
@@ -103,13 +108,14 @@ int main(int argc, char** argv) {
     else if (k == "--seeds") o.seeds = std::atoi(v.c_str());
     else if (k == "--commit-horizon") o.commit_horizon = std::atoi(v.c_str());
     else if (k == "--between") o.between = std::atoi(v.c_str());
+    else if (k == "--revoke") o.revoke = std::atoi(v.c_str());
     else if (k == "--param" && v.find('=') != std::string::npos)
       o.params.emplace_back(v.substr(0, v.find('=')), v.substr(v.find('=') + 1));
     else if (k == "--p-delay") o.p_delay = std::atof(v.c_str());
     else {
       std::fprintf(stderr,
                    "unknown option %s (--map --planner --execution --robots --ticks --p-delay --max-delay --speed "
-                   "--seeds --commit-horizon --between 0|1 --param key=value)\n",
+                   "--seeds --commit-horizon --between 0|1 --revoke 0|1 --param key=value)\n",
                    k.c_str());
       return 2;
     }

@@ -214,6 +214,50 @@ Cell Executor::command(int r) const {
   return t.dispatched ? t.path.front() : t.cell;
 }
 
+// Drops robot r's commitments that were not dispatched yet, and, transitively, those of every
+// robot queued to enter the cell r now ends in after r: it would wait there for a move of r that
+// is no longer planned (and the planner would see both robots in that cell).
+int Executor::revoke(int r) {
+  Track& t = tracks_[r];
+  const size_t keep = t.dispatched ? 1 : 0;
+  if (t.path.size() <= keep) return 0;
+  for (size_t k = t.path.size(); k-- > keep;) {  // r's last visit of each dropped cell goes
+    auto it = visits_.find(t.path[k]);
+    auto& q = it->second;
+    q.erase(std::find(q.rbegin(), q.rend(), r).base() - 1);
+    if (q.empty()) visits_.erase(it);
+  }
+  t.path.resize(keep);
+  const Cell end = keep ? t.path.front() : t.cell;
+  std::vector<int> behind;
+  auto it = visits_.find(end);
+  if (it != visits_.end()) {
+    auto last = std::find(it->second.rbegin(), it->second.rend(), r).base();  // after r's last visit
+    behind.assign(last, it->second.end());
+  }
+  int n = 1;
+  for (int q : behind) n += revoke(q);
+  return n;
+}
+
+// A late robot's undispatched moves, and the moves of the robots waiting to enter the cell it
+// has not left yet, are taken back (transitively, see revoke): they are planned again this tick,
+// around it, instead of queueing behind it for as long as it is late.
+int Executor::revoke_behind_late() {
+  int n = 0;
+  for (int r = 0; r < num_robots(); ++r) {
+    const Track& t = tracks_[r];
+    if (!t.active || t.health != RobotHealth::kOk || !t.dispatched || t.dispatched_at >= ticks_) continue;
+    n += revoke(r);
+    auto it = visits_.find(t.cell);
+    if (it == visits_.end()) continue;
+    const std::vector<int> waiting(it->second.begin() + 1, it->second.end());
+    for (int q : waiting)
+      if (!tracks_[q].dispatched) n += revoke(q);
+  }
+  return n;
+}
+
 // Drops every commitment that was not dispatched yet and rebuilds the cells' visit queues from
 // what robots are in and what they were commanded into.
 void Executor::resync() {
@@ -450,6 +494,7 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
   if (cfg_.mode == ExecutionMode::kAdg) {
     reconcile_adg(robots, out);
     dispatch_ready(out, ticks_);
+    if (cfg_.revoke_behind_late) out.revoked = revoke_behind_late();
     plan_and_commit(goals, planner, out);
     dispatch_ready(out, ticks_);
   } else {

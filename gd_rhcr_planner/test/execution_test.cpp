@@ -99,7 +99,9 @@ TEST(ExecutorAdg, ACellIsEnteredOnlyAfterTheRobotsBeforeHaveLeftIt) {
   gdrhcr::DistTable dist(g);
   FnPlanner* fn;
   auto planner = make_fn_planner(g, 2, &fn);
-  Executor ex(g, dist, 2, ExecutorConfig{});
+  ExecutorConfig cfg;
+  cfg.revoke_behind_late = false;  // robot 1's follow move stays committed while robot 0 is late
+  Executor ex(g, dist, 2, cfg);
   std::vector<RobotRecord> robots{at(g, 1, 0), at(g, 3, 0)};
   int step = 0;
   fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
@@ -393,6 +395,40 @@ TEST(ExecutorAdg, ARobotBehindGoesAsSoonAsTheOneAheadHasArrived) {
       EXPECT_TRUE(ex.advance(robots, &hold).empty()) << "nothing new: nothing sent twice";
     }
   }
+}
+
+// Robot 0 is late (still on its way at the next tick); robot 1 waits to enter the cell robot 0 has
+// not left, and robot 2 to enter robot 1's. Both moves were only committed, not sent: they are
+// taken back and the planner plans both robots again from their cells, with robot 0's cell blocked.
+TEST(ExecutorAdg, MovesQueuedBehindALateRobotAreTakenBackTransitively) {
+  const Grid g = Grid::from_rows({"......", "......"});
+  gdrhcr::DistTable dist(g);
+  FnPlanner* fn;
+  auto planner = make_fn_planner(g, 3, &fn);
+  Executor ex(g, dist, 3, ExecutorConfig{});
+  std::vector<RobotRecord> robots{at(g, 2, 0), at(g, 1, 0), at(g, 0, 0)};
+  int step = 0;
+  std::vector<Cell> seen_pos, seen_blocked;
+  fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
+    if (step++ == 0) {  // a train: each robot follows the one ahead
+      next = {g.cell(3, 0), g.cell(2, 0), g.cell(1, 0)};
+      return;
+    }
+    seen_pos = w.positions;
+    seen_blocked = w.blocked ? *w.blocked : std::vector<Cell>{};
+  };
+  auto out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.command[0], g.cell(3, 0));
+  EXPECT_EQ(out.waiting, 2);
+  robots[0].moving = true;  // late
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.revoked, 2);
+  EXPECT_EQ(ex.check_invariants(), "");
+  EXPECT_EQ(seen_pos, (std::vector<Cell>{g.cell(3, 0), g.cell(1, 0), g.cell(0, 0)}));
+  EXPECT_EQ(seen_blocked, std::vector<Cell>{g.cell(2, 0)}) << "the late robot's cell is blocked";
+  EXPECT_EQ(out.command[0], g.cell(3, 0)) << "a dispatched move is never taken back";
+  EXPECT_TRUE(ex.committed(1).empty());
+  EXPECT_TRUE(ex.committed(2).empty());
 }
 
 // A robot on hold (paused, emergency stop) gets no new move and is an obstacle to the planner;

@@ -12,7 +12,8 @@
 //   no lock-step: advance() does this between ticks too, as the arrival reports come in. A dispatched cell stays reserved for the robot until it reports arrival, and a
 //   commitment is never changed by a replan, so any pattern of delays gives no collision, and,
 //   since commitments follow one global plan order with cycles (rotations) turned into waits, no
-//   deadlock. A robot with `commit_horizon` moves committed and not finished (the one it is
+//   deadlock. Moves not dispatched yet may still be taken back: those queued behind a late robot
+//   are (revoke_behind_late). A robot with `commit_horizon` moves committed and not finished (the one it is
 //   making included) is immovable for the planner in that step (the others plan around it).
 // * "lockstep" (the node's behaviour before issue 13, kept for comparison): every tick the planner
 //   plans from the reported cells; a robot still moving is held, the cell it is entering is
@@ -53,6 +54,9 @@ struct ExecutorConfig {
   int commit_horizon = 1;       // ADG: moves a robot may have committed and not finished, the one it makes included (>= 1)
   double plan_deadline_s = 0;   // per planner call (DeadlinePlanner); <= 0 waits for the planner
   size_t dist_budget_bytes = size_t(256) << 20;  // distance table around bad robots
+  // ADG: a late robot's undispatched moves and those of the robots waiting to enter its cell are
+  // taken back (transitively) and planned again around it, instead of queueing behind it.
+  bool revoke_behind_late = true;
 };
 
 struct TickOutput {
@@ -70,6 +74,7 @@ struct TickOutput {
   int waiting = 0;               // ADG: robots whose next committed move waits for robots ahead of them
   int dispatched = 0;            // ADG: moves commanded for the first time this tick
   int resyncs = 0;               // ADG: commitments rebuilt this tick (a robot changed health, slipped)
+  int revoked = 0;               // ADG: robots whose undispatched moves were taken back (revoke_behind_late)
   std::string plan_error;        // the planned step was rejected by the validator: nobody got a new move
   std::vector<std::string> warnings;  // robots that changed health, unexpected reports
 };
@@ -132,6 +137,8 @@ class Executor {
   void reconcile_lockstep(const std::vector<RobotRecord>& robots, TickOutput& out);
   void resync();
   void arrive(int r);
+  int revoke(int r);
+  int revoke_behind_late();
   int dispatch_ready(TickOutput& out, uint64_t stamp);
   bool holds(int r) const { return hold_ && r < static_cast<int>(hold_->size()) && (*hold_)[r]; }
   int holder_of(Cell c, int except) const;
