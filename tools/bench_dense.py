@@ -14,10 +14,28 @@ reports GD-RHCR +57.7% over PIBT there). `--ablation` adds PIBT's techniques one
 Time per step: `wall` is the planner's wall time per step (the product metric; noisy on a shared
 machine), `cpu` its process CPU time per step (all threads), steadier under load. The LLLG
 budget column is a tenth of LLLG's time per step, the issue's target.
+
+Like for like (`--shared`): LLLG draws its own task stream (its own random starts; a new goal
+is any free cell other than the others' current goals), so its figure and ours come from
+different streams, whose free-flow bounds differ by a few percent from seed to seed. `--shared`
+writes one instance per (map, agents, seed): distinct random starts and, per agent, a fixed
+sequence of random goals (any free cell but the previous one), as a LoRR problem for gdrhcr_sim
+(`roundrobin`: agent k's j-th task is tasks[j * N + k], one goal known at a time) and as a
+scenario with the goal sequence in extra columns, which LLLG's lifelong runner consumes before
+drawing goals of its own (`--lllg BIN` runs it with its README's settings, 1 s per step). Both
+then have the same starts, the same goals and the same free-flow bound; LLLG's count (goal
+changes over its 500 planning iterations, so arrivals at step 500 are not counted) is reported
+as is and with those arrivals added (our count).
+
+    /usr/bin/python3 tools/bench_dense.py --shared --seeds 1 2 3 --lllg /tmp/lllg/build/main \
+        --settings warehouse-10-20-10-2-2:800 random-32-32-20:200 --json results/FILE.json
 """
 import argparse
 import json
 import os
+import random
+import re
+import shlex
 import subprocess
 import sys
 import tempfile
@@ -72,6 +90,117 @@ def run(sim, map_name, agents, args, steps, seed, tasks="random"):
     }
 
 
+def write_shared_instance(map_name, agents, seed, out, goals_per_agent=40):
+    """The shared instance (see the module text); returns the LoRR problem and scenario paths."""
+    map_path = os.path.join(TOP, "maps", map_name + ".map")
+    with open(map_path) as f:
+        lines = f.read().split("\n")
+    h, w = int(lines[1].split()[1]), int(lines[2].split()[1])
+    free = [(x, y) for y in range(h) for x in range(w) if lines[4 + y][x] not in "@T"]
+    rng = random.Random(seed * 7919 + 17)
+    starts = rng.sample(free, agents)
+    goals = []
+    for s in starts:
+        seq, prev = [], s
+        for _ in range(goals_per_agent):
+            g = prev
+            while g == prev:
+                g = rng.choice(free)
+            seq.append(g)
+            prev = g
+        goals.append(seq)
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    cell = lambda c: c[1] * w + c[0]
+    with open(out + ".agents", "w") as f:
+        f.write(f"{agents}\n" + "".join(f"{cell(c)}\n" for c in starts))
+    with open(out + ".tasks", "w") as f:
+        f.write(f"{agents * goals_per_agent}\n" +
+                "".join(f"{cell(goals[k][j])}\n" for j in range(goals_per_agent) for k in range(agents)))
+    with open(out + ".json", "w") as f:
+        json.dump({"mapFile": map_path, "agentFile": os.path.abspath(out + ".agents"),
+                   "taskFile": os.path.abspath(out + ".tasks"), "teamSize": agents, "numTasksReveal": 1,
+                   "taskAssignmentStrategy": "roundrobin"}, f)
+    with open(out + ".scen", "w") as f:
+        f.write("version 1\n")
+        for k in range(agents):
+            cols = [0, map_name + ".map", w, h, starts[k][0], starts[k][1]] + [v for g in goals[k] for v in g]
+            f.write("\t".join(map(str, cols)) + "\n")
+    return out + ".json", out + ".scen"
+
+
+def run_shared_sim(sim, problem, args, steps):
+    with tempfile.NamedTemporaryFile(suffix=".json", delete=False) as f:
+        out = f.name
+    subprocess.run([sim, "--lorr-problem", problem, "--steps", str(steps), "--quiet", "--out", out] + args,
+                   check=True, stdout=subprocess.DEVNULL)
+    with open(out) as f:
+        d = json.load(f)
+    os.unlink(out)
+    return {"throughput": d["throughput"], "free_flow": d["free_flow_throughput"],
+            "cpu_ms": 1000 * d["step_cpu_time_mean_s"], "wall_ms": 1000 * d["step_wall_time_mean_s"],
+            "longest_wait": d["progress"]["longest_wait_steps"], "params": d.get("params", {})}
+
+
+def run_shared_lllg(binary, map_name, agents, seed, scen, steps, out):
+    """LLLG on the shared scenario with its README's settings; its count and ours."""
+    cmd = [binary, "-i", scen, "-m", os.path.join(TOP, "maps", map_name + ".map"), "-N", str(agents), "-s", str(seed),
+           "-v", "1", "--lg", "--lg_window", "20", "--lacam_horizon", "10", "--lifelong", "-S", str(steps),
+           "-t", "1", "-o", out]
+    log = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+    tasks = int(re.search(r"total_completed_tasks=(\d+)", log).group(1))
+    comp_ms = float(re.search(r"comp_time_ms=([0-9.e+]+)", log).group(1))
+    # Arrivals at the last step: the executed configuration `steps` on the goals then in force.
+    pt = re.compile(r"\((\d+),(\d+)\)")
+    goals_last = sol_last = None
+    section = None
+    with open(out) as f:
+        for line in f:
+            if line.startswith("goals="):
+                section = "goals"
+            elif line.startswith("solution="):
+                section = "solution"
+            elif line.startswith(f"{steps}:"):
+                cells = pt.findall(line)
+                if section == "goals":
+                    goals_last = cells
+                elif section == "solution":
+                    sol_last = cells
+    last = sum(1 for g, c in zip(goals_last, sol_last) if g == c) if goals_last and sol_last else 0
+    return {"tasks": tasks, "throughput": tasks / steps, "throughput_our_count": (tasks + last) / steps,
+            "ms_per_step": comp_ms / steps, "command": " ".join(cmd)}
+
+
+def shared(args):
+    print(f"# Like for like: the same starts and goal sequences for both, {args.steps} steps\n")
+    print("| map | agents | seed | free flow | GD-RHCR | of free flow | cpu ms | LLLG (its count; ours) | of free flow | GD-RHCR vs LLLG |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    rows = []
+    for setting in args.settings:
+        m, a = setting.split(":")
+        a = int(a)
+        for seed in args.seeds:
+            base = os.path.join(args.instance_dir, f"{m}_{a}_s{seed}")
+            problem, scen = write_shared_instance(m, a, seed, base)
+            r = run_shared_sim(args.sim, problem, args.planner_args, args.steps)
+            r.update({"map": m, "agents": a, "seed": seed, "planner_args": args.planner_args})
+            line = (f"| {m} | {a} | {seed} | {r['free_flow']:.2f} | {r['throughput']:.2f} | "
+                    f"{100 * r['throughput'] / r['free_flow']:.1f}% | {r['cpu_ms']:.1f} |")
+            if args.lllg:
+                lr = run_shared_lllg(args.lllg, m, a, seed, scen, args.steps, base + ".lllg.txt")
+                r["lllg"] = lr
+                line += (f" {lr['throughput']:.2f}; {lr['throughput_our_count']:.2f} | "
+                         f"{100 * lr['throughput_our_count'] / r['free_flow']:.1f}% | "
+                         f"{100 * r['throughput'] / lr['throughput_our_count']:.1f}% |")
+            else:
+                line += " | | |"
+            print(line, flush=True)
+            rows.append(r)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump({"shared_instances": rows}, f, indent=1)
+        print(f"\nwrote {args.json}")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sim", default=os.environ.get("GDRHCR_SIM", os.path.join(TOP, "build/src/gdrhcr_sim")))
@@ -82,7 +211,18 @@ def main(argv=None):
     ap.add_argument("--json", help="write every row here")
     ap.add_argument("--plot", help="draw throughput and ms per step against LLLG's into this PNG")
     ap.add_argument("--from-json", help="do not run: plot (--plot) the rows of an earlier --json")
+    ap.add_argument("--shared", action="store_true", help="like for like: shared instances (module text)")
+    ap.add_argument("--settings", nargs="+", default=[f"{m}:{a}" for m, a in LLLG], help="MAP:AGENTS for --shared")
+    ap.add_argument("--seeds", nargs="+", type=int, default=[1], help="seeds for --shared")
+    ap.add_argument("--lllg", help="LLLG binary for --shared (not run without it)")
+    ap.add_argument("--instance-dir", default=os.path.join(tempfile.gettempdir(), "gdrhcr_shared"))
+    ap.add_argument("--planner-args", default="--planner gd-rhcr",
+                    help="gdrhcr_sim options for --shared, one string (--planner-args='--planner gd-rhcr --V 3')")
     args = ap.parse_args(argv)
+    if args.shared:
+        args.planner_args = shlex.split(args.planner_args)
+        shared(args)
+        return
     if args.from_json:
         with open(args.from_json) as f:
             plot(json.load(f)["rows"], args.plot or "dense_vs_lllg.png")

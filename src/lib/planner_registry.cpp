@@ -34,9 +34,9 @@ PibtOptions pibt_options(Params& p, bool paper) {
 // updates them in two phases of map bands on the thread pool (local_guidance.hpp).
 constexpr int kLazyGuidanceAgents = 2000;
 
-LocalGuidanceConfig guidance_config(Params& p, int num_agents) {
+LocalGuidanceConfig guidance_config(Params& p, int num_agents, int default_window = LocalGuidanceConfig{}.window) {
   LocalGuidanceConfig c;
-  c.window = p.get_int("lg-window", c.window, 1, 1000);
+  c.window = p.get_int("lg-window", default_window, 1, 1000);
   // Lazy paths are searched again only when they meet another one; a cheaper collision lets
   // them meet (and be searched) more often: 10,000 agents on warehouse-20-40-10-2-2, 300 steps,
   // throughput 32.31 -> 35.13 (1.23x -> 1.34x PIBT) for ~25% more CPU (docs/results.md).
@@ -53,6 +53,10 @@ LocalGuidanceConfig guidance_config(Params& p, int num_agents) {
   return c;
 }
 
+// Maps where at least 1% of the free cells are cut cells (dead ends, one-lane passages:
+// random-32-32-20 2.8%, random-64-64-20 3.3%, room-64-64-8 1.8%; warehouses and open maps none).
+bool many_cut_cells(const Grid& grid) { return cut_cell_share(grid) >= 0.01; }
+
 // The product default's motion forecast: 8 steps, rollout window 8 (as good as 10 and 10 on
 // random-32-32-20 over seeds 1-3 and about 15% cheaper) on maps where at least 1% of the free cells
 // are cut cells (dead ends, one-lane passages: random-32-32-20 has 2.8%), where agents' real
@@ -61,7 +65,17 @@ LocalGuidanceConfig guidance_config(Params& p, int num_agents) {
 // maps: no gain there, for twice the CPU) and none past kLazyGuidanceAgents agents.
 int default_forecast_steps(const Grid& grid, int num_agents) {
   if (num_agents > kLazyGuidanceAgents) return 0;
-  return cut_cell_share(grid) >= 0.01 ? 8 : 0;
+  return many_cut_cells(grid) ? 8 : 0;
+}
+
+// The product default's guidance window: 30 steps on maps without many cut cells, up to
+// kLazyGuidanceAgents agents (issue 11, seeds 1-3 against 20: warehouse-10-20-10-2-1 400 / 800
+// agents +0.6% / +1.7%, warehouse-10-20-10-2-2 800 +0.4%, empty-48-48 400 +0.2%, for 20-40% more
+// CPU on the warehouses, where paths are long and head-on meetings in an aisle show up more than
+// 20 steps ahead); else 20: where the motion forecast runs (random-32-32-20 300: 30 gains nothing;
+// room-64-64-8 400: twice the CPU, its doors make detours long) and for fleets of thousands.
+int default_guidance_window(const Grid& grid, int num_agents) {
+  return num_agents > kLazyGuidanceAgents || many_cut_cells(grid) ? 20 : 30;
 }
 
 // The motion forecast the guidance is planned around (motion_forecast.hpp): `lg-forecast` steps
@@ -117,7 +131,7 @@ const std::vector<std::pair<std::string, PlannerFactory>>& registry() {
          c.density_margin = p.get_int("density-margin", c.density_margin, 0, 1 << 20);
          c.pibt = pibt_options(p, paper);  // the preset's PIBT unless overridden
          c.guidance = p.get_choice("guidance", c.guidance ? "local" : "none", {"none", "local"}) == "local";
-         c.lg = guidance_config(p, n);
+         c.lg = guidance_config(p, n, paper ? LocalGuidanceConfig{}.window : default_guidance_window(grid, n));
          c.lg.seed = seed;
          c.forecast = forecast_config(p, paper ? 0 : default_forecast_steps(grid, n));
          return std::make_unique<GdRhcrPlanner>(grid, n, seed, c);

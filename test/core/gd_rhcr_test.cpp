@@ -234,3 +234,28 @@ TEST(GdRhcr, TwoAgentsInOneCellIsAnErrorNotAHang) {
     }
   }
 }
+
+// The product default's density rule: a lone agent with nobody near is planned by PBS; a
+// group whose neighbourhood (the bounding box grown by density_margin cells) holds agents on
+// more than 2% of its free cells goes to guided PIBT, even when it is small. Here two agents
+// side by side fill 2 of the 90 cells around them (2.2%; primary under the former 5% rule).
+TEST(GdRhcrProduct, DensityRuleKeepsPbsForLoneAgentsOnly) {
+  std::vector<std::string> rows(21, std::string(21, '.'));
+  Grid g = Grid::from_rows(rows);
+  DistTable dist(g);
+  GdRhcrConfig c = GdRhcrConfig::product();
+  c.k_threshold = 5;  // the size rule sends neither group to PIBT
+  c.node_budget = 200;
+  GdRhcrPlanner p(g, 3, 1, c);
+  const std::vector<Cell> pos = {g.cell(5, 10), g.cell(15, 10), g.cell(16, 10)};
+  const std::vector<std::vector<Cell>> goals = {{g.cell(5, 2)}, {g.cell(15, 18)}, {g.cell(16, 2)}};
+  std::vector<Cell> next(3, kNoCell);
+  WorldView w{g, dist, 0, pos, goals};
+  p.plan_step(w, next);
+  ASSERT_EQ(p.last_groups().size(), 2u);
+  for (const auto& info : p.last_groups()) {
+    if (info.agents.size() == 1) EXPECT_EQ(info.action, GroupAction::Primary) << "the lone agent";
+    else EXPECT_EQ(info.action, GroupAction::ThresholdFallback) << "the pair";
+  }
+  for (int i = 0; i < 3; ++i) EXPECT_LT(dist.get(goals[i][0], next[i]), dist.get(goals[i][0], pos[i]));
+}

@@ -2,6 +2,8 @@
 // product configuration. Every simulation validates every executed step (a collision throws).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "list_stream.hpp"
 
 #include "gdrhcr/gd_rhcr.hpp"
@@ -361,4 +363,39 @@ TEST(LocalGuidance, KeepsAProvablyOptimalPathAndExtendsIt) {
   again.update(w0, {0});
   again.update(w1, {0});
   EXPECT_EQ(again.searches(), 2);
+}
+
+// The product default plans guidance 30 steps ahead on maps without many cut cells, up to 2,000
+// agents (20 where the motion forecast runs, for the paper preset with guidance switched on, for
+// guided PIBT and for fleets of thousands); a warehouse run with
+// it is collision-free (the simulator validates every step), every agent moves and goals are
+// reached.
+TEST(GdRhcrProduct, DefaultGuidanceWindowIs30WithoutCutCellsUpTo2000Agents) {
+  auto window_of = [](const std::string& planner, int agents, const std::string& preset,
+                      const std::string& map = "warehouse-10-20-10-2-1.map") {
+    Grid g = Grid::load(repo("maps/" + map));
+    Params p;
+    p.set("preset", preset);
+    p.set("guidance", "local");
+    return make_planner(planner, p, g, agents, 1)->params()["lg_window"].get<int>();
+  };
+  EXPECT_EQ(window_of("gd-rhcr", 400, "default"), 30);
+  EXPECT_EQ(window_of("gd-rhcr", 2500, "default"), 20);
+  EXPECT_EQ(window_of("gd-rhcr", 400, "paper"), 20);
+  EXPECT_EQ(window_of("pibt", 400, "default"), 20);
+  EXPECT_EQ(window_of("gd-rhcr", 400, "default", "empty-48-48.map"), 30);
+  EXPECT_EQ(window_of("gd-rhcr", 300, "default", "random-32-32-20.map"), 20);  // cut cells: the forecast's maps
+
+  Grid g = Grid::load(repo("maps/warehouse-10-20-10-2-1.map"));
+  Params p;
+  p.set("node-budget", "200");
+  auto planner = make_planner("gd-rhcr", p, g, 300, 5);
+  RandomNavigationStream tasks(g, 5);
+  SimResult r = run(g, tasks, *planner, random_starts(g, 300, 5), 80);
+  EXPECT_GT(r.goals_reached, 100);
+  for (size_t i = 0; i < r.paths.size(); ++i) {
+    std::vector<Cell> visited(r.paths[i].begin(), r.paths[i].end());
+    std::sort(visited.begin(), visited.end());
+    EXPECT_GT(std::unique(visited.begin(), visited.end()) - visited.begin(), 1) << "agent " << i << " never moved";
+  }
 }
