@@ -42,10 +42,11 @@ for ex in $EXECUTIONS; do
     runs+=("$ex" "$p" "$out")
   done
 done
-/usr/bin/python3 - "$OUT" "$ROBOTS" "$DURATION" "$P_DELAY" "$MAX_DELAY" "$SPEED_SPREAD" "$PLANNER" "${runs[@]}" <<'PY'
+commit=$(git -C "$top" rev-parse --short HEAD 2>/dev/null || echo unknown)
+/usr/bin/python3 - "$OUT" "$ROBOTS" "$DURATION" "$P_DELAY" "$MAX_DELAY" "$SPEED_SPREAD" "$PLANNER" "$SEED" "$commit" "${runs[@]}" <<'PY'
 import json, sys
-out, robots, duration, p_delay, max_delay, spread, planner = sys.argv[1:8]
-rest = sys.argv[8:]
+out, robots, duration, p_delay, max_delay, spread, planner, seed, commit = sys.argv[1:10]
+rest = sys.argv[10:]
 runs = {}
 for i in range(0, len(rest), 3):
     ex, p, path = rest[i:i + 3]
@@ -84,7 +85,8 @@ def figures(s):
 
 res = {"robots": int(robots), "duration_s": float(duration), "p_delay": float(p_delay),
        "max_delay_ticks": int(max_delay), "speed_spread": float(spread), "planner": planner,
-       "map": "warehouse-10-20-10-2-1", "tick_rate_hz": 2.0, "interlock": "off",
+       "map": "warehouse-10-20-10-2-1", "tick_rate_hz": 2.0, "interlock": "off", "seed": int(seed),
+       "commit": commit, "node_parameters": "config/fleet.yaml at that commit",
        "command": "ROBOTS=%s DURATION=%s bash scripts/bench_delays.sh" % (robots, duration)}
 for ex, r in runs.items():
     nd, de = figures(r.get("no_delay")), figures(r.get("delay"))
