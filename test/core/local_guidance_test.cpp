@@ -368,8 +368,8 @@ TEST(LocalGuidance, KeepsAProvablyOptimalPathAndExtendsIt) {
 // The product default plans guidance 30 steps ahead on maps without many cut cells, up to 2,000
 // agents (20 where the motion forecast runs, for the paper preset with guidance switched on, for
 // guided PIBT and for fleets of thousands); a warehouse run with
-// it is collision-free (the simulator validates every step), every agent moves and goals are
-// reached.
+// it is collision-free (the simulator validates every step), every agent moves, goals are
+// reached, and it is the same run with 1 and 2 threads (budget mode).
 TEST(GdRhcrProduct, DefaultGuidanceWindowIs30WithoutCutCellsUpTo2000Agents) {
   auto window_of = [](const std::string& planner, int agents, const std::string& preset,
                       const std::string& map = "warehouse-10-20-10-2-1.map") {
@@ -387,15 +387,21 @@ TEST(GdRhcrProduct, DefaultGuidanceWindowIs30WithoutCutCellsUpTo2000Agents) {
   EXPECT_EQ(window_of("gd-rhcr", 300, "default", "random-32-32-20.map"), 20);  // cut cells: the forecast's maps
 
   Grid g = Grid::load(repo("maps/warehouse-10-20-10-2-1.map"));
-  Params p;
-  p.set("node-budget", "200");
-  auto planner = make_planner("gd-rhcr", p, g, 300, 5);
-  RandomNavigationStream tasks(g, 5);
-  SimResult r = run(g, tasks, *planner, random_starts(g, 300, 5), 80);
-  EXPECT_GT(r.goals_reached, 100);
-  for (size_t i = 0; i < r.paths.size(); ++i) {
-    std::vector<Cell> visited(r.paths[i].begin(), r.paths[i].end());
-    std::sort(visited.begin(), visited.end());
-    EXPECT_GT(std::unique(visited.begin(), visited.end()) - visited.begin(), 1) << "agent " << i << " never moved";
+  std::vector<std::vector<Cell>> first;
+  for (const char* threads : {"1", "2"}) {  // budget mode: the same run for any thread count
+    Params p;
+    p.set("node-budget", "200");
+    p.set("threads", threads);
+    auto planner = make_planner("gd-rhcr", p, g, 300, 5);
+    RandomNavigationStream tasks(g, 5);
+    SimResult r = run(g, tasks, *planner, random_starts(g, 300, 5), 80);
+    EXPECT_GT(r.goals_reached, 100);
+    for (size_t i = 0; i < r.paths.size(); ++i) {
+      std::vector<Cell> visited(r.paths[i].begin(), r.paths[i].end());
+      std::sort(visited.begin(), visited.end());
+      EXPECT_GT(std::unique(visited.begin(), visited.end()) - visited.begin(), 1) << "agent " << i << " never moved";
+    }
+    if (first.empty()) first = r.paths;
+    else EXPECT_EQ(r.paths, first) << threads << " threads";
   }
 }
