@@ -3,6 +3,7 @@
 #include "gd_rhcr_planner/execution.hpp"
 
 #include <algorithm>
+#include <iterator>
 #include <map>
 
 #include "gdrhcr/params.hpp"
@@ -223,8 +224,10 @@ int Executor::revoke(int r) {
   if (t.path.size() <= keep) return 0;
   for (size_t k = t.path.size(); k-- > keep;) {  // r's last visit of each dropped cell goes
     auto it = visits_.find(t.path[k]);
+    if (it == visits_.end()) continue;  // never: every committed cell has r's visit queued
     auto& q = it->second;
-    q.erase(std::find(q.rbegin(), q.rend(), r).base() - 1);
+    auto pos = std::find(q.rbegin(), q.rend(), r);
+    if (pos != q.rend()) q.erase(std::prev(pos.base()));
     if (q.empty()) visits_.erase(it);
   }
   t.path.resize(keep);
