@@ -64,14 +64,8 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
     if (!out.stepped) r.error = "no step: " + out.skip_reason;
     else if (!out.plan_error.empty()) r.error = "plan rejected: " + out.plan_error;
     else if (cfg.mode == ExecutionMode::kAdg) r.error = ex.check_invariants();
-    DelayedFleet::Between between;
-    if (o.between)
-      between = [&ex](const std::vector<RobotRecord>& reports) {
-        std::vector<std::pair<int, gdrhcr::Cell>> cmds;
-        for (int rb : ex.advance(reports)) cmds.emplace_back(rb, ex.command(rb));
-        return cmds;
-      };
-    if (r.error.empty()) r.error = fleet.execute(out, p_delay, o.max_delay, between);
+    if (r.error.empty())
+      r.error = fleet.execute(out, p_delay, o.max_delay, o.between ? DelayedFleet::on_arrival(ex) : nullptr);
     if (!r.error.empty()) {
       r.error = "tick " + std::to_string(t) + ": " + r.error;
       return r;

@@ -129,6 +129,14 @@ std::string DelayedFleet::execute(const TickOutput& out, double p_delay, int max
   return "";
 }
 
+DelayedFleet::Between DelayedFleet::on_arrival(Executor& ex) {
+  return [&ex](const std::vector<RobotRecord>& reports) {
+    std::vector<std::pair<int, Cell>> cmds;
+    for (int r : ex.advance(reports)) cmds.emplace_back(r, ex.command(r));
+    return cmds;
+  };
+}
+
 // No cell holds two robots; a moving robot holds both its cells.
 std::string DelayedFleet::check_physical() {
   std::unordered_map<Cell, int> at;

@@ -206,10 +206,11 @@ SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int t
   cfg.commit_horizon = commit_horizon;
   Executor ex(g, dist, n, cfg);
   DelayedFleet sim(g, n, seed);
-  // Dispatch on arrival: the executor sees the robots' reports after every substep.
-  DelayedFleet::Between on_arrival = [&ex](const std::vector<RobotRecord>& reports) {
-    std::vector<std::pair<int, Cell>> cmds;
-    for (int r : ex.advance(reports)) cmds.emplace_back(r, ex.command(r));
+  // Dispatch on arrival: the executor sees the robots' reports after every substep, and the ADG
+  // invariants hold after each of those dispatches too.
+  const DelayedFleet::Between dispatch = DelayedFleet::on_arrival(ex);
+  DelayedFleet::Between on_arrival = [&](const std::vector<RobotRecord>& reports) {
+    auto cmds = dispatch(reports);
     EXPECT_EQ(ex.check_invariants(), "");
     return cmds;
   };

@@ -60,6 +60,10 @@ class DelayedFleet {
 
   gdrhcr::Cell collision_cell = gdrhcr::kNoCell;
 
+  // Dispatch on arrival, as the node's dispatch timer does: the robots' reports go to ex.advance
+  // and the moves it frees are sent at once.
+  static Between on_arrival(Executor& ex);
+
  private:
   gdrhcr::Cell random_cell(size_t robot);
   std::string take_command(size_t i, gdrhcr::Cell c);
