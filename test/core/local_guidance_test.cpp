@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "list_stream.hpp"
+#include "solver_scenarios.hpp"
 
 #include "gdrhcr/gd_rhcr.hpp"
 #include "gdrhcr/local_guidance.hpp"
@@ -19,14 +19,7 @@ namespace {
 std::string repo(const std::string& rel) { return std::string(GDRHCR_SOURCE_DIR) + "/" + rel; }
 
 using gdrhcr::test_support::ListStream;
-
-SimResult run(const Grid& g, TaskStream& tasks, Planner& p, const std::vector<Cell>& starts, int steps) {
-  DistTable dist(g);
-  SimOptions opt;
-  opt.steps = steps;
-  opt.record_paths = true;
-  return run_simulation(g, dist, tasks, p, starts, opt);
-}
+using gdrhcr::test_support::run;
 
 bool is_walk(const Grid& g, const std::vector<Cell>& path) {
   for (size_t k = 0; k + 1 < path.size(); ++k)
@@ -170,13 +163,9 @@ TEST(GuidedPibt, DenseNonBiconnectedMapBeatsPlainPibt) {
 }
 
 TEST(GdRhcrProduct, CorridorAndNonBiconnectedMapsCollisionFreeWithGoals) {
-  {
-    Grid g = Grid::from_rows({"..........", "@@@@.@@@@@", "@@@@.@@@@@"});
-    GdRhcrPlanner p(g, 3, 2, product_budget_config());
-    ListStream tasks({{g.cell(9, 0), g.cell(0, 0)}, {g.cell(0, 0), g.cell(9, 0)}, {g.cell(4, 2), g.cell(5, 0)}});
-    SimResult r = run(g, tasks, p, {g.cell(0, 0), g.cell(9, 0), g.cell(4, 1)}, 100);
-    EXPECT_GE(r.goals_reached, 5);
-  }
+  const SimResult corridor = test_support::run_corridor_with_pocket(
+      [](const Grid& g, int n) { return std::make_unique<GdRhcrPlanner>(g, n, 2, product_budget_config()); });
+  EXPECT_GE(corridor.goals_reached, 5);
   Grid g = Grid::load(repo("maps/random-32-32-20.map"));
   GdRhcrPlanner p(g, 250, 6, product_budget_config());
   RandomNavigationStream tasks(g, 6);

@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "list_stream.hpp"
+#include "solver_scenarios.hpp"
 
 #include "gdrhcr/gd_rhcr.hpp"
 #include "gdrhcr/motion_forecast.hpp"
@@ -22,14 +22,7 @@ namespace {
 std::string repo(const std::string& rel) { return std::string(GDRHCR_SOURCE_DIR) + "/" + rel; }
 
 using gdrhcr::test_support::ListStream;
-
-SimResult run(const Grid& g, TaskStream& tasks, Planner& p, const std::vector<Cell>& starts, int steps) {
-  DistTable dist(g);
-  SimOptions opt;
-  opt.steps = steps;
-  opt.record_paths = true;
-  return run_simulation(g, dist, tasks, p, starts, opt);
-}
+using gdrhcr::test_support::run;
 
 MotionForecastConfig forecast(int steps) {
   MotionForecastConfig f;
@@ -121,13 +114,9 @@ TEST(MotionForecast, GuidedPibtCorridorHeadOnAllArrive) {
 }
 
 TEST(MotionForecast, GdRhcrCorridorAndNonBiconnectedMapCollisionFreeWithGoals) {
-  {
-    Grid g = Grid::from_rows({"..........", "@@@@.@@@@@", "@@@@.@@@@@"});
-    GdRhcrPlanner p(g, 3, 2, product_with_forecast());
-    ListStream tasks({{g.cell(9, 0), g.cell(0, 0)}, {g.cell(0, 0), g.cell(9, 0)}, {g.cell(4, 2), g.cell(5, 0)}});
-    SimResult r = run(g, tasks, p, {g.cell(0, 0), g.cell(9, 0), g.cell(4, 1)}, 100);
-    EXPECT_GE(r.goals_reached, 5);
-  }
+  const SimResult corridor = test_support::run_corridor_with_pocket(
+      [](const Grid& g, int n) { return std::make_unique<GdRhcrPlanner>(g, n, 2, product_with_forecast()); });
+  EXPECT_GE(corridor.goals_reached, 5);
   // random-32-32-20 has dead ends and cut cells; 250 agents fill a third of it. Every agent
   // must reach goals (no one starves).
   Grid g = Grid::load(repo("maps/random-32-32-20.map"));
