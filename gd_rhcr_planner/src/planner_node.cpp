@@ -119,6 +119,7 @@ class PlannerNode {
     bool proceed_without_missing = false;
   };
   TickInput gather_tick_locked(std::unique_ptr<DeadlinePlanner>& retired);
+  void robot_records_locked(std::vector<RobotRecord>& robots, std::vector<uint8_t>& held) const;
   gd_rhcr_msgs::GroupArray group_message(const TickOutput& exec, const gdrhcr::Planner* primary,
                                          std::vector<int>& group_of) const;
   void count_outcome_locked(const TickOutput& exec, uint64_t tick);
@@ -661,12 +662,8 @@ void PlannerNode::on_dispatch(const ros::TimerEvent& ev) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (tick_ == 0) return;
   std::vector<RobotRecord> robots;
-  std::vector<uint8_t> held(fleet_->num_robots(), 0);
-  robots.reserve(fleet_->num_robots());
-  for (int r = 0; r < fleet_->num_robots(); ++r) {
-    robots.push_back(fleet_->robot(r));
-    held[r] = operator_->holds(r);
-  }
+  std::vector<uint8_t> held;
+  robot_records_locked(robots, held);
   const std::vector<int> changed = executor_->advance(robots, &held);
   if (changed.empty()) return;
   early_dispatches_ += changed.size();
@@ -703,13 +700,20 @@ PlannerNode::TickInput PlannerNode::gather_tick_locked(std::unique_ptr<DeadlineP
   }
   publish_events_locked();
   fleet_->fill_goals(in.goals);
-  in.held.assign(fleet_->num_robots(), 0);
-  in.robots.reserve(fleet_->num_robots());
-  for (int r = 0; r < fleet_->num_robots(); ++r) {
-    in.robots.push_back(fleet_->robot(r));
-    in.held[r] = operator_->holds(r);  // paused, emergency stop: no new move
-  }
+  robot_records_locked(in.robots, in.held);
   return in;
+}
+
+// What the execution layer gets of each robot: its record, and whether it is held (paused,
+// emergency stop: no new move).
+void PlannerNode::robot_records_locked(std::vector<RobotRecord>& robots, std::vector<uint8_t>& held) const {
+  robots.clear();
+  robots.reserve(fleet_->num_robots());
+  held.assign(fleet_->num_robots(), 0);
+  for (int r = 0; r < fleet_->num_robots(); ++r) {
+    robots.push_back(fleet_->robot(r));
+    held[r] = operator_->holds(r);
+  }
 }
 
 // The planner's groups by robot id (group_of: each robot's group; a robot alone when the
