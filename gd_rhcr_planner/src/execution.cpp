@@ -196,16 +196,10 @@ std::vector<int> Executor::advance(const std::vector<RobotRecord>& robots, const
   }
   if (!arrived) return changed;
   hold_ = hold;
-  for (int r = 0; r < num_robots(); ++r) {
-    const Track& t = tracks_[r];
-    if (t.active && t.health == RobotHealth::kOk && !t.dispatched && !t.path.empty() && !holds(r)) changed.push_back(r);
-  }
   TickOutput unused;
   // A move dispatched between ticks counts as dispatched in the coming tick: it is late only if
   // it is not made by the tick after.
-  dispatch_ready(unused, ticks_ + 1);
-  changed.erase(std::remove_if(changed.begin(), changed.end(), [&](int r) { return !tracks_[r].dispatched; }),
-                changed.end());
+  dispatch_ready(unused, ticks_ + 1, &changed);
   hold_ = nullptr;
   return changed;
 }
@@ -279,7 +273,7 @@ void Executor::resync() {
   }
 }
 
-int Executor::dispatch_ready(TickOutput& out, uint64_t stamp) {
+int Executor::dispatch_ready(TickOutput& out, uint64_t stamp, std::vector<int>* sent) {
   int n = 0;
   for (int r = 0; r < num_robots(); ++r) {
     Track& t = tracks_[r];
@@ -288,6 +282,7 @@ int Executor::dispatch_ready(TickOutput& out, uint64_t stamp) {
     if (it != visits_.end() && !it->second.empty() && it->second.front() == r) {
       t.dispatched = true;
       t.dispatched_at = stamp;
+      if (sent) sent->push_back(r);
       ++n;
     }
   }

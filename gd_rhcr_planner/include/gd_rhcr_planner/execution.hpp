@@ -139,7 +139,8 @@ class Executor {
   void arrive(int r);
   int revoke(int r);
   int revoke_behind_late();
-  int dispatch_ready(TickOutput& out, uint64_t stamp);
+  // Dispatches every move whose cell's earlier visitors have left; `sent` (optional) gets the robots.
+  int dispatch_ready(TickOutput& out, uint64_t stamp, std::vector<int>* sent = nullptr);
   bool holds(int r) const { return hold_ && r < static_cast<int>(hold_->size()) && (*hold_)[r]; }
   int holder_of(Cell c, int except) const;
   void add_blocked_cells(int r, std::vector<Cell>& blocked) const;
