@@ -590,6 +590,7 @@ nlohmann::json GdRhcrPlanner::params() const {
           {"density_margin", cfg_.density_margin},
           {"lg_window", cfg_.lg.window},
           {"lg_cost", cfg_.lg.collision_cost},
+          {"lg_cost_per_kind", cfg_.lg.cost_per_kind},
           {"lg_lazy", cfg_.lg.lazy},
           {"lg_phases", cfg_.lg.phases},
           {"lg_forecast", forecast_ ? cfg_.forecast.steps : 0},

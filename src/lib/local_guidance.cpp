@@ -100,10 +100,16 @@ void LocalGuidance::set_path(int i, int now, const std::vector<Cell>& path, Cell
   enroll(i, +1);
 }
 
-int LocalGuidance::collisions(Cell from, Cell to, int abs_t) const {
-  int c = at(to, slot(abs_t + 1));
-  if (from != to) c += leaving(to, slot(abs_t), dir(to, from));
-  return c;
+// What a step from -> to at abs_t pays on top of its 1 for meeting other paths: the collision
+// cost per kind of conflict met (vertex, swap; or once for either), plus a tiny amount per path
+// met, so that among equal costs the less crowded step wins.
+float LocalGuidance::collision_penalty(Cell from, Cell to, int abs_t) const {
+  const int vertex = at(to, slot(abs_t + 1));
+  const int swap = from != to ? leaving(to, slot(abs_t), dir(to, from)) : 0;
+  if (vertex + swap == 0) return 0.f;
+  const float cost = static_cast<float>(cfg_.collision_cost);
+  const int kinds = cfg_.cost_per_kind ? (vertex > 0) + (swap > 0) : 1;
+  return cost * kinds + 1e-3f * (vertex + swap);
 }
 
 bool LocalGuidance::is_valid(const WorldView& world, int i) const {
@@ -314,8 +320,8 @@ void LocalGuidance::update_banded(const WorldView& world, const std::vector<int>
   for (auto& c : counts) counts_.add(c);
 }
 
-// Space-time A* over (t, cell), t = 0..W: cost 1 per step plus collision_cost (and a tiny
-// per-conflict count) when a step meets another path; heuristic the distance to the goal.
+// Space-time A* over (t, cell), t = 0..W: cost 1 per step plus its collision penalty (meeting
+// other paths); heuristic the distance to the goal.
 // Among equal f the deeper node goes first, so free paths are found almost without branching.
 void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::minstd_rand& rng, Counts& counts) {
   ++counts.searches;
@@ -380,9 +386,7 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
       if (mk.closed == stamp) return;
       const int h = row[u];
       if (h >= kUnreachable) return;
-      const int c = collisions(n.v, u, world.timestep + n.t);
-      float g = n.g + 1.f;
-      if (c > 0) g += static_cast<float>(cfg_.collision_cost) + 1e-3f * c;
+      const float g = n.g + 1.f + collision_penalty(n.v, u, world.timestep + n.t);
       if (mk.seen == stamp && mk.best_g <= g) return;  // reached as cheaply before
       mk.seen = stamp;
       mk.best_g = g;

@@ -262,6 +262,7 @@ nlohmann::json PibtPlanner::params() const {
   if (guidance_) {
     p["lg_window"] = guidance_->config().window;
     p["lg_cost"] = guidance_->config().collision_cost;
+    p["lg_cost_per_kind"] = guidance_->config().cost_per_kind;
     p["lg_lazy"] = guidance_->config().lazy;
     p["lg_phases"] = guidance_->config().phases;
     p["lg_forecast"] = forecast_ ? forecast_->config().steps : 0;

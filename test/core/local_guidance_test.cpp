@@ -83,6 +83,42 @@ TEST(LocalGuidance, SecondPathAvoidsTheFirstWhenALaneIsFree) {
   EXPECT_LE(b.size(), 11u);  // a detour of two steps at most
 }
 
+TEST(LocalGuidance, AStepMeetingAParkedAndAnOncomingPathPaysPerKindOfConflict) {
+  // Agent 0 at (0,0) heads for (2,0). The direct step into (1,0) meets agent 1, which parks
+  // there, and swaps with agent 2, which comes the other way and parks on (0,0) (so waiting
+  // there conflicts too). Per kind of conflict that step costs 2 x 3 on top of the two moves (8),
+  // more than the free six-step detour round the wall; counted once (3, total 5) it is cheaper.
+  Grid g = Grid::from_rows({"...", ".@.", "..."});
+  DistTable dist(g);
+  const Cell a0 = g.cell(0, 0), mid = g.cell(1, 0), goal = g.cell(2, 0);
+  std::vector<Cell> pos = {a0, goal, mid};
+  std::vector<std::vector<Cell>> goals = {{goal}, {mid}, {a0}};
+  for (bool per_kind : {true, false}) {
+    LocalGuidanceConfig cfg;
+    cfg.window = 10;
+    cfg.cost_per_kind = per_kind;
+    LocalGuidance lg(g, 3, cfg);
+    std::vector<Cell> parks_in_mid(11, mid), parks_in_a0(11, a0);
+    parks_in_mid[0] = goal;  // agent 1: (2,0) -> (1,0), then stays
+    parks_in_a0[0] = mid;    // agent 2: (1,0) -> (0,0), then stays
+    lg.set_path(1, 0, parks_in_mid, mid);
+    lg.set_path(2, 0, parks_in_a0, a0);
+    WorldView w{g, dist, 0, pos, goals};
+    lg.update(w, {0});
+    const auto path = lg.path_from(0, 0);
+    ASSERT_FALSE(path.empty());
+    EXPECT_TRUE(is_walk(g, path));
+    EXPECT_EQ(path.back(), goal);
+    if (per_kind) {
+      EXPECT_EQ(path.size(), 7u) << "the detour round the wall";
+      EXPECT_EQ(path[1], g.cell(0, 1));
+    } else {
+      EXPECT_EQ(path.size(), 3u) << "straight through";
+      EXPECT_EQ(path[1], mid);
+    }
+  }
+}
+
 TEST(LocalGuidance, RejectsNonsenseConfig) {
   Grid g = Grid::from_rows({"...."});
   LocalGuidanceConfig c;
@@ -374,6 +410,17 @@ TEST(GdRhcrProduct, DefaultGuidanceWindowIs30WithoutCutCellsUpTo2000Agents) {
   EXPECT_EQ(window_of("pibt", 400, "default"), 20);
   EXPECT_EQ(window_of("gd-rhcr", 400, "default", "empty-48-48.map"), 30);
   EXPECT_EQ(window_of("gd-rhcr", 300, "default", "random-32-32-20.map"), 20);  // cut cells: the forecast's maps
+
+  // The collision cost is paid per kind of conflict up to 2,000 agents; once for fleets of thousands.
+  auto per_kind = [](int agents, const std::string& planner) {
+    Grid g = Grid::load(repo("maps/warehouse-10-20-10-2-1.map"));
+    Params p;
+    p.set("guidance", "local");
+    return make_planner(planner, p, g, agents, 1)->params()["lg_cost_per_kind"].get<bool>();
+  };
+  EXPECT_TRUE(per_kind(400, "gd-rhcr"));
+  EXPECT_TRUE(per_kind(400, "pibt"));
+  EXPECT_FALSE(per_kind(2500, "gd-rhcr"));
 
   Grid g = Grid::load(repo("maps/warehouse-10-20-10-2-1.map"));
   std::vector<std::vector<Cell>> first;

@@ -6,6 +6,11 @@
 // guidance cell first, so agents spread over parallel aisles and queue instead of meeting
 // head-on, while PIBT keeps the step collision-free.
 //
+// A step pays the collision cost for meeting a path at its cell (vertex) and again for swapping
+// with one (cost_per_kind): stepping into a cell another agent will hold while a third comes the
+// other way is two conflicts to resolve, and guidance that counts it once leads agents into
+// oncoming streams (random-32-32-20, 300 agents: +1.2% throughput; docs/results.md, issue 11).
+//
 // A search ends at the window's end or on the goal (the agent gets its next goal there).
 // Guidance paths are kept across steps in absolute time and replanned lazily: when the agent is
 // not where its path says, when its goal changed, or when less than half the window is left.
@@ -39,6 +44,10 @@ namespace gdrhcr {
 struct LocalGuidanceConfig {
   int window = 20;               // W: timesteps each guidance path covers
   double collision_cost = 3.0;   // added per step that meets another path (vertex or swap)
+  // true: a step that meets one path at its cell and another swapping with it pays the cost
+  // twice (once per kind of conflict); false: once, whatever it meets (the rule before issue 11's
+  // session 7). Per kind is the default up to 2,000 agents (planner_registry.cpp).
+  bool cost_per_kind = true;
   // false: replan every agent every step unless its kept path is provably as good (it meets
   // nobody and gains a step on the goal every step); true: keep paths until they are left,
   // the goal changes, they meet another path or less than `keep` steps are left (cheaper).
@@ -135,7 +144,7 @@ class LocalGuidance {
   void update_banded(const WorldView& world, const std::vector<int>& agents,
                      std::chrono::steady_clock::time_point deadline);
   void plan(const WorldView& world, int i, Search& search, std::minstd_rand& rng, Counts& counts);
-  int collisions(Cell from, Cell to, int abs_t) const;  // others' conflicts with from -> to at abs_t
+  float collision_penalty(Cell from, Cell to, int abs_t) const;  // others' conflicts with from -> to at abs_t
   int slot(int abs_t) const { return abs_t % slots_; }
   int dir(Cell from, Cell to) const;
 
