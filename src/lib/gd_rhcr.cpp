@@ -591,6 +591,8 @@ nlohmann::json GdRhcrPlanner::params() const {
           {"lg_window", cfg_.lg.window},
           {"lg_cost", cfg_.lg.collision_cost},
           {"lg_cost_per_kind", cfg_.lg.cost_per_kind},
+          {"lg_far_cost", cfg_.lg.far_collision_cost},
+          {"lg_near_steps", cfg_.lg.near_steps},
           {"lg_lazy", cfg_.lg.lazy},
           {"lg_phases", cfg_.lg.phases},
           {"lg_forecast", forecast_ ? cfg_.forecast.steps : 0},

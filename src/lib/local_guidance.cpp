@@ -36,6 +36,7 @@ LocalGuidance::LocalGuidance(const Grid& grid, int num_agents, LocalGuidanceConf
       rng_(config.seed) {
   if (cfg_.window < 1) throw ParamError("local guidance: window must be >= 1");
   if (!(cfg_.collision_cost >= 0)) throw ParamError("local guidance: collision cost must be >= 0");
+  if (cfg_.near_steps < 0) throw ParamError("local guidance: near steps must be >= 0");
   if (cfg_.phases < 0 || cfg_.phases == 1) throw ParamError("local guidance: phases must be 0 or >= 2");
   if (cfg_.phases >= 2) parallel_ = std::make_unique<Parallel>();
 }
@@ -101,13 +102,14 @@ void LocalGuidance::set_path(int i, int now, const std::vector<Cell>& path, Cell
 }
 
 // What a step from -> to at abs_t pays on top of its 1 for meeting other paths: the collision
-// cost per kind of conflict met (vertex, swap; or once for either), plus a tiny amount per path
-// met, so that among equal costs the less crowded step wins.
-float LocalGuidance::collision_penalty(Cell from, Cell to, int abs_t) const {
+// cost (the far one from near_steps ahead on) per kind of conflict met (vertex, swap; or once for
+// either), plus a tiny amount per path met, so that among equal costs the less crowded step wins.
+float LocalGuidance::collision_penalty(Cell from, Cell to, int abs_t, int ahead) const {
   const int vertex = at(to, slot(abs_t + 1));
   const int swap = from != to ? leaving(to, slot(abs_t), dir(to, from)) : 0;
   if (vertex + swap == 0) return 0.f;
-  const float cost = static_cast<float>(cfg_.collision_cost);
+  const bool far = cfg_.far_collision_cost >= 0 && ahead >= cfg_.near_steps;
+  const float cost = static_cast<float>(far ? cfg_.far_collision_cost : cfg_.collision_cost);
   const int kinds = cfg_.cost_per_kind ? (vertex > 0) + (swap > 0) : 1;
   return cost * kinds + 1e-3f * (vertex + swap);
 }
@@ -386,7 +388,7 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
       if (mk.closed == stamp) return;
       const int h = row[u];
       if (h >= kUnreachable) return;
-      const float g = n.g + 1.f + collision_penalty(n.v, u, world.timestep + n.t);
+      const float g = n.g + 1.f + collision_penalty(n.v, u, world.timestep + n.t, n.t);
       if (mk.seen == stamp && mk.best_g <= g) return;  // reached as cheaply before
       mk.seen = stamp;
       mk.best_g = g;

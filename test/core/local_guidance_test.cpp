@@ -119,6 +119,37 @@ TEST(LocalGuidance, AStepMeetingAParkedAndAnOncomingPathPaysPerKindOfConflict) {
   }
 }
 
+TEST(LocalGuidance, ConflictsFarAheadCostTheFarCost) {
+  // Two lanes; agent 0 runs east along the top one, agent 1 parks on it. Passing through the
+  // parked agent costs a collision, going round it two steps. With a far cost of 1 from 3 steps
+  // ahead, a conflict 4 steps ahead is passed through; one 1 step ahead is still gone round.
+  Grid g = Grid::from_rows({"........", "........"});
+  DistTable dist(g);
+  auto path_past = [&](int parked_x, double far_cost) {
+    LocalGuidanceConfig cfg;
+    cfg.window = 12;
+    cfg.far_collision_cost = far_cost;
+    cfg.near_steps = 3;
+    LocalGuidance lg(g, 2, cfg);
+    const Cell parked = g.cell(parked_x, 0);
+    lg.set_path(1, 0, std::vector<Cell>(13, parked), parked);
+    std::vector<Cell> pos = {g.cell(0, 0), parked};
+    std::vector<std::vector<Cell>> goals = {{g.cell(7, 0)}, {parked}};
+    WorldView w{g, dist, 0, pos, goals};
+    lg.update(w, {0});
+    const auto path = lg.path_from(0, 0);
+    EXPECT_TRUE(is_walk(g, path));
+    EXPECT_EQ(path.back(), g.cell(7, 0));
+    return path;
+  };
+  const Cell far_parked = g.cell(5, 0), near_parked = g.cell(2, 0);
+  auto through = [](const std::vector<Cell>& p, Cell c) { return std::find(p.begin(), p.end(), c) != p.end(); };
+  EXPECT_FALSE(through(path_past(5, -1), far_parked)) << "without a far cost: round";
+  EXPECT_TRUE(through(path_past(5, 1.0), far_parked)) << "4 steps ahead: through";
+  EXPECT_EQ(path_past(5, 1.0).size(), 8u);
+  EXPECT_FALSE(through(path_past(2, 1.0), near_parked)) << "1 step ahead: round";
+}
+
 TEST(LocalGuidance, RejectsNonsenseConfig) {
   Grid g = Grid::from_rows({"...."});
   LocalGuidanceConfig c;
@@ -126,6 +157,9 @@ TEST(LocalGuidance, RejectsNonsenseConfig) {
   EXPECT_THROW(LocalGuidance(g, 1, c), ParamError);
   c.window = 5;
   c.collision_cost = -1;
+  EXPECT_THROW(LocalGuidance(g, 1, c), ParamError);
+  c.collision_cost = 3;
+  c.near_steps = -1;
   EXPECT_THROW(LocalGuidance(g, 1, c), ParamError);
 }
 
@@ -421,6 +455,14 @@ TEST(GdRhcrProduct, DefaultGuidanceWindowIs30WithoutCutCellsUpTo2000Agents) {
   EXPECT_TRUE(per_kind(400, "gd-rhcr"));
   EXPECT_TRUE(per_kind(400, "pibt"));
   EXPECT_FALSE(per_kind(2500, "gd-rhcr"));
+  // Conflicts far ahead cost less where the motion forecast runs (maps with many cut cells).
+  auto far_cost = [](const std::string& map) {
+    Grid g = Grid::load(repo("maps/" + map));
+    Params p;
+    return make_planner("gd-rhcr", p, g, 300, 1)->params()["lg_far_cost"].get<double>();
+  };
+  EXPECT_EQ(far_cost("random-32-32-20.map"), 2.0);
+  EXPECT_EQ(far_cost("warehouse-10-20-10-2-1.map"), -1.0);
 
   Grid g = Grid::load(repo("maps/warehouse-10-20-10-2-1.map"));
   std::vector<std::vector<Cell>> first;

@@ -11,6 +11,10 @@
 // other way is two conflicts to resolve, and guidance that counts it once leads agents into
 // oncoming streams (random-32-32-20, 300 agents: +1.2% throughput; docs/results.md, issue 11).
 //
+// With the motion forecast (maps with many cut cells), conflicts 3 or more steps ahead cost 2
+// instead of 3 (far_collision_cost): random-32-32-20 300, seeds 1-10, +1.3%; on warehouses,
+// without the forecast, it loses 1.6-2% (docs/results.md, issue 11, session 7).
+//
 // A search ends at the window's end or on the goal (the agent gets its next goal there).
 // Guidance paths are kept across steps in absolute time and replanned lazily: when the agent is
 // not where its path says, when its goal changed, or when less than half the window is left.
@@ -48,6 +52,10 @@ struct LocalGuidanceConfig {
   // twice (once per kind of conflict); false: once, whatever it meets (the rule before issue 11's
   // session 7). Per kind is the default up to 2,000 agents (planner_registry.cpp).
   bool cost_per_kind = true;
+  // Conflicts `near_steps` or more steps ahead of the search's start cost `far_collision_cost`
+  // instead (< 0: collision_cost): the further ahead, the less the others' paths foretell.
+  double far_collision_cost = -1;
+  int near_steps = 3;
   // false: replan every agent every step unless its kept path is provably as good (it meets
   // nobody and gains a step on the goal every step); true: keep paths until they are left,
   // the goal changes, they meet another path or less than `keep` steps are left (cheaper).
@@ -144,7 +152,8 @@ class LocalGuidance {
   void update_banded(const WorldView& world, const std::vector<int>& agents,
                      std::chrono::steady_clock::time_point deadline);
   void plan(const WorldView& world, int i, Search& search, std::minstd_rand& rng, Counts& counts);
-  float collision_penalty(Cell from, Cell to, int abs_t) const;  // others' conflicts with from -> to at abs_t
+  // What a step from -> to at abs_t, `ahead` steps after the search's start, pays for meeting others.
+  float collision_penalty(Cell from, Cell to, int abs_t, int ahead) const;
   int slot(int abs_t) const { return abs_t % slots_; }
   int dir(Cell from, Cell to) const;
 
