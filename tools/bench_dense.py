@@ -69,6 +69,9 @@ ABLATION = [
     ("PIBT + local guidance + motion forecast (8 steps)", ["--planner", "pibt", "--guidance", "local", "--lg-forecast", "8"]),
     ("GD-RHCR default, no motion forecast", ["--planner", "gd-rhcr", "--lg-forecast", "0"]),
     ("GD-RHCR default, motion forecast (8 steps) on every map", ["--planner", "gd-rhcr", "--lg-forecast", "8"]),
+    ("GD-RHCR default, collision cost once per step, no far cost (before session 7)",
+     ["--planner", "gd-rhcr", "--lg-cost-per-kind", "0", "--lg-far-cost", "-1"]),
+    ("GD-RHCR default, no far cost (conflicts cost 3 however far ahead)", ["--planner", "gd-rhcr", "--lg-far-cost", "-1"]),
 ]
 
 
