@@ -47,10 +47,10 @@ LocalGuidanceConfig guidance_config(Params& p, int num_agents, int default_windo
   // them meet (and be searched) more often: 10,000 agents on warehouse-20-40-10-2-2, 300 steps,
   // throughput 32.31 -> 35.13 (1.23x -> 1.34x PIBT) for ~25% more CPU (docs/results.md).
   c.collision_cost = p.get_double("lg-cost", num_agents > kLazyGuidanceAgents ? 1.5 : c.collision_cost, 0.0, 1e6);
-  // Per kind of conflict (vertex, swap) up to kLazyGuidanceAgents agents (issue 11, session 7:
-  // random-32-32-20 300 +1.2%, warehouse-10-20-10-2-1 800 +1.7%, seeds 1-5 / 1-3); the fleets of
-  // thousands keep the rule lg-cost 1.5 was tuned with (not measured there).
-  c.cost_per_kind = p.get_int("lg-cost-per-kind", num_agents > kLazyGuidanceAgents ? 0 : 1, 0, 1) == 1;
+  // Per kind of conflict (vertex, swap) (issue 11, session 7: random-32-32-20 300 +1.3%,
+  // warehouse-10-20-10-2-1 800 +1.9%, seeds 1-5 / 1-3; warehouse-20-40-10-2-2 2,500 / 5,000
+  // agents +0.4% / -0.1% for 7% / 13% less CPU).
+  c.cost_per_kind = p.get_int("lg-cost-per-kind", 1, 0, 1) == 1;
   c.far_collision_cost = p.get_double("lg-far-cost", with_forecast ? kFarCollisionCost : -1, -1, 1e6);
   if (c.far_collision_cost < 0 && c.far_collision_cost != -1)
     throw ParamError("parameter lg-far-cost must be >= 0, or -1 (as lg-cost)");

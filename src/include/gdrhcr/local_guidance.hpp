@@ -50,7 +50,7 @@ struct LocalGuidanceConfig {
   double collision_cost = 3.0;   // added per step that meets another path (vertex or swap)
   // true: a step that meets one path at its cell and another swapping with it pays the cost
   // twice (once per kind of conflict); false: once, whatever it meets (the rule before issue 11's
-  // session 7). Per kind is the default up to 2,000 agents (planner_registry.cpp).
+  // session 7).
   bool cost_per_kind = true;
   // Conflicts `near_steps` or more steps ahead of the search's start cost `far_collision_cost`
   // instead (< 0: collision_cost): the further ahead, the less the others' paths foretell.
