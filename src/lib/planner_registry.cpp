@@ -34,7 +34,7 @@ PibtOptions pibt_options(Params& p, bool paper) {
 // updates them in two phases of map bands on the thread pool (local_guidance.hpp).
 constexpr int kLazyGuidanceAgents = 2000;
 
-// With the motion forecast, conflicts from kNearSteps ahead on cost kFarCollisionCost (issue 11,
+// With the motion forecast, conflicts near_steps (3) or more steps ahead cost kFarCollisionCost (issue 11,
 // session 7: random-32-32-20 300 +1.3% over seeds 1-10, random-64-64-20 800 and room-64-64-8 400
 // +1%; on warehouses without the forecast it loses 1.6-2%, so it goes with the forecast).
 constexpr double kFarCollisionCost = 2.0;

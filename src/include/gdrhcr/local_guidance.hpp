@@ -9,7 +9,7 @@
 // A step pays the collision cost for meeting a path at its cell (vertex) and again for swapping
 // with one (cost_per_kind): stepping into a cell another agent will hold while a third comes the
 // other way is two conflicts to resolve, and guidance that counts it once leads agents into
-// oncoming streams (random-32-32-20, 300 agents: +1.2% throughput; docs/results.md, issue 11).
+// oncoming streams (random-32-32-20, 300 agents: +1.3% throughput; docs/results.md, issue 11).
 //
 // With the motion forecast (maps with many cut cells), conflicts 3 or more steps ahead cost 2
 // instead of 3 (far_collision_cost): random-32-32-20 300, seeds 1-10, +1.3%; on warehouses,
@@ -47,7 +47,7 @@ namespace gdrhcr {
 
 struct LocalGuidanceConfig {
   int window = 20;               // W: timesteps each guidance path covers
-  double collision_cost = 3.0;   // added per step that meets another path (vertex or swap)
+  double collision_cost = 3.0;   // added per kind of conflict (vertex, swap) a step meets
   // true: a step that meets one path at its cell and another swapping with it pays the cost
   // twice (once per kind of conflict); false: once, whatever it meets (the rule before issue 11's
   // session 7).
