@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <limits>
 #include <stdexcept>
 
 #include <tbb/blocked_range.h>
@@ -109,7 +110,9 @@ GdRhcrPlanner::GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, Gd
       validator_(grid),
       plan_of_(num_agents),
       slot_of_(num_agents, 0),
-      arena_(std::make_unique<Arena>(std::max(1, cfg_.threads))) {
+      arena_(std::make_unique<Arena>(std::max(1, cfg_.threads))),
+      last_secondary_(num_agents, std::numeric_limits<int>::min() / 2),
+      last_sent_(num_agents, std::numeric_limits<int>::min() / 2) {
   if (cfg_.V < 0) throw ParamError("gd-rhcr: V must be >= 0, got " + std::to_string(cfg_.V));
   if (cfg_.H < 1) throw ParamError("gd-rhcr: H must be >= 1, got " + std::to_string(cfg_.H));
   if (!(cfg_.c_soft >= 0)) throw ParamError("gd-rhcr: c_soft must be >= 0");
@@ -117,6 +120,7 @@ GdRhcrPlanner::GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, Gd
   if (!(cfg_.timeout_s > 0)) throw ParamError("gd-rhcr: timeout must be > 0");
   if (!(cfg_.step_budget_s >= 0)) throw ParamError("gd-rhcr: step budget must be >= 0 seconds");
   if (cfg_.node_budget < 0) throw ParamError("gd-rhcr: node budget must be >= 0");
+  if (cfg_.secondary_stay < 0) throw ParamError("gd-rhcr: secondary stay must be >= 0 steps");
   if (cfg_.solver != "pbs" && cfg_.solver != "pibt")
     throw ParamError("gd-rhcr: solver must be pbs or pibt, got '" + cfg_.solver + "'");
   if (cfg_.solver2 != "pibt")
@@ -450,7 +454,13 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
     last_groups_[g].agents = groups[g];
     const bool crowded = cfg_.max_density < 1.0 && local_density(world, groups[g]) > cfg_.max_density;
     if (crowded) ++density_fallbacks_;
-    if (static_cast<int>(groups[g].size()) >= k_threshold_ || cfg_.solver == "pibt" || crowded) {
+    const bool sent = static_cast<int>(groups[g].size()) >= k_threshold_ || cfg_.solver == "pibt" || crowded;
+    if (sent)
+      for (int i : groups[g]) last_sent_[i] = t;
+    bool stays = false;  // hysteresis: sent to the secondary solver a moment ago
+    if (!sent && cfg_.secondary_stay > 0)
+      for (int i : groups[g]) stays = stays || t - last_sent_[i] <= cfg_.secondary_stay;
+    if (sent || stays) {
       last_groups_[g].action = GroupAction::ThresholdFallback;
       threshold_groups.push_back(g);
     } else if (needs_replan(world, groups[g])) {
@@ -553,6 +563,10 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
     for (auto& info : last_groups_)
       if (repaired[info.agents[0]]) info.action = GroupAction::Repair;
   }
+  for (int i : secondary) last_secondary_[i] = t;
+  for (size_t k = 0; k < jobs.size(); ++k)  // border flicker: a secondary agent handed to PBS
+    if (last_groups_[jobs[k].group_index].action == GroupAction::Primary)
+      for (int i : *jobs[k].agents) solver_switches_ += last_secondary_[i] == t - 1;
   adopt_one_step_plans(world, secondary, next);
   if (forecast_ && !secondary.empty()) roll_forecast(world, secondary, on_secondary, next);
 
@@ -588,6 +602,7 @@ nlohmann::json GdRhcrPlanner::params() const {
           {"max_density", cfg_.max_density},
           {"step_budget_s", cfg_.step_budget_s},
           {"density_margin", cfg_.density_margin},
+          {"secondary_stay", cfg_.secondary_stay},
           {"lg_window", cfg_.lg.window},
           {"lg_cost", cfg_.lg.collision_cost},
           {"lg_cost_per_kind", cfg_.lg.cost_per_kind},
@@ -615,6 +630,7 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"soft_conflicts_in_plans", soft_conflicts_},
           {"threshold_fallbacks", threshold_fallbacks_},
           {"density_fallbacks", density_fallbacks_},
+          {"solver_switches", solver_switches_},
           {"budget_skips", budget_skips_},
           {"guidance_cut_short", guidance_ ? guidance_->cut_short() : 0},
           {"guidance_searches", guidance_ ? guidance_->searches() : 0},

@@ -143,6 +143,7 @@ const std::vector<std::pair<std::string, PlannerFactory>>& registry() {
          c.solver2 = p.get_choice("solver2", c.solver2, {"pibt"});
          c.max_density = p.get_double("max-density", c.max_density, 0.0, 1.0);
          c.density_margin = p.get_int("density-margin", c.density_margin, 0, 1 << 20);
+         c.secondary_stay = p.get_int("secondary-stay", c.secondary_stay, 0, 1 << 20);
          c.pibt = pibt_options(p, paper);  // the preset's PIBT unless overridden
          c.guidance = p.get_choice("guidance", c.guidance ? "local" : "none", {"none", "local"}) == "local";
          c.forecast = forecast_config(p, paper ? 0 : default_forecast_steps(grid, n));

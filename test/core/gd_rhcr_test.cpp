@@ -259,3 +259,37 @@ TEST(GdRhcrProduct, DensityRuleKeepsPbsForLoneAgentsOnly) {
   }
   for (int i = 0; i < 3; ++i) EXPECT_LT(dist.get(goals[i][0], next[i]), dist.get(goals[i][0], pos[i]));
 }
+
+// Hysteresis at group borders (secondary_stay): a pair sent to the secondary solver by the
+// density rule splits up; without hysteresis each half goes back to PBS at once (a solver
+// switch, counted), with secondary_stay = 3 they stay with the secondary solver for 3 more steps.
+TEST(GdRhcrProduct, SecondaryStayKeepsAGroupOnTheSecondarySolverForAWhile) {
+  std::vector<std::string> rows(21, std::string(21, '.'));
+  Grid g = Grid::from_rows(rows);
+  DistTable dist(g);
+  const std::vector<std::vector<Cell>> goals = {{g.cell(5, 2)}, {g.cell(15, 18)}, {g.cell(16, 2)}};
+  const std::vector<Cell> together = {g.cell(5, 10), g.cell(15, 10), g.cell(16, 10)};
+  const std::vector<Cell> apart = {g.cell(5, 10), g.cell(15, 10), g.cell(10, 16)};
+  for (int stay : {0, 3}) {
+    GdRhcrConfig c = GdRhcrConfig::product();
+    c.k_threshold = 5;
+    c.node_budget = 200;
+    c.secondary_stay = stay;
+    GdRhcrPlanner p(g, 3, 1, c);
+    std::vector<Cell> next(3, kNoCell);
+    for (int t = 0; t <= 5; ++t) {
+      const std::vector<Cell>& pos = t == 0 ? together : apart;
+      WorldView w{g, dist, t, pos, goals};
+      p.plan_step(w, next);
+      for (const auto& info : p.last_groups()) {
+        if (info.agents[0] == 0) continue;  // the lone agent, never crowded
+        const bool on_secondary = info.action == GroupAction::ThresholdFallback;
+        EXPECT_EQ(on_secondary, t <= stay) << "stay " << stay << ", t " << t << ", agent " << info.agents[0];
+      }
+    }
+    EXPECT_EQ(p.stats()["solver_switches"].get<long>(), 2) << "stay " << stay;  // agents 1 and 2, once
+  }
+  GdRhcrConfig bad = GdRhcrConfig::product();
+  bad.secondary_stay = -1;
+  EXPECT_THROW(GdRhcrPlanner(g, 3, 1, bad), ParamError);
+}

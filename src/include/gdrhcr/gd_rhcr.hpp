@@ -50,6 +50,9 @@ struct GdRhcrConfig {
   // box must be at most `max_density` for the primary solver (1 = no limit, as in the paper).
   double max_density = 1.0;
   int density_margin = 4;
+  // Hysteresis at group borders: a group with an agent whose group was sent to the secondary
+  // solver (by size or crowd) within the last `secondary_stay` steps stays with it (0 = none).
+  int secondary_stay = 0;
   PibtOptions pibt;              // the secondary solver's PIBT techniques
   bool guidance = false;         // the secondary solver follows local guidance paths
   LocalGuidanceConfig lg;        // ... with these settings
@@ -141,6 +144,9 @@ class GdRhcrPlanner : public Planner {
   long threshold_fallbacks_ = 0, failure_fallbacks_ = 0, timeouts_ = 0, repairs_ = 0;
   long pbs_nodes_ = 0, soft_conflicts_ = 0, solved_steps_ = 0;
   long guided_moves_ = 0, guidance_missed_ = 0;  // secondary moves with a guidance cell; not onto it
+  long solver_switches_ = 0;  // agent-steps planned by the primary solver right after a secondary move
+  std::vector<int> last_secondary_;  // per agent: the last timestep the secondary solver moved it
+  std::vector<int> last_sent_;       // ... the last timestep its group was sent there (size, crowd)
   double plan_time_sum_all_steps_ = 0, primary_time_sum_ = 0;
 };
 
