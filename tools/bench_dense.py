@@ -72,6 +72,8 @@ ABLATION = [
     ("GD-RHCR default, collision cost once per step, no far cost (before session 7)",
      ["--planner", "gd-rhcr", "--lg-cost-per-kind", "0", "--lg-far-cost", "-1"]),
     ("GD-RHCR default, no far cost (conflicts cost 3 however far ahead)", ["--planner", "gd-rhcr", "--lg-far-cost", "-1"]),
+    ("GD-RHCR default without the contraflow cost (before session 8)", ["--planner", "gd-rhcr", "--lg-contraflow", "0"]),
+    ("PIBT + local guidance + contraflow cost", ["--planner", "pibt", "--guidance", "local", "--lg-contraflow", "0.1"]),
 ]
 
 

@@ -608,6 +608,7 @@ nlohmann::json GdRhcrPlanner::params() const {
           {"lg_cost_per_kind", cfg_.lg.cost_per_kind},
           {"lg_far_cost", cfg_.lg.far_collision_cost},
           {"lg_near_steps", cfg_.lg.near_steps},
+          {"lg_contraflow", cfg_.lg.contraflow_cost},
           {"lg_lazy", cfg_.lg.lazy},
           {"lg_phases", cfg_.lg.phases},
           {"lg_forecast", forecast_ ? cfg_.forecast.steps : 0},

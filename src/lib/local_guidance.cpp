@@ -33,10 +33,13 @@ LocalGuidance::LocalGuidance(const Grid& grid, int num_agents, LocalGuidanceConf
       planned_at_(num_agents, 0),
       goal_(num_agents, kNoCell),
       occ_(static_cast<size_t>(slots_) * grid.num_cells(), Occupancy{0, {0, 0, 0, 0}}),
+      flow_(grid.num_cells(), std::array<uint16_t, 4>{0, 0, 0, 0}),
+      contraflow_(static_cast<float>(config.contraflow_cost)),
       rng_(config.seed) {
   if (cfg_.window < 1) throw ParamError("local guidance: window must be >= 1");
   if (!(cfg_.collision_cost >= 0)) throw ParamError("local guidance: collision cost must be >= 0");
   if (cfg_.near_steps < 0) throw ParamError("local guidance: near steps must be >= 0");
+  if (!(cfg_.contraflow_cost >= 0)) throw ParamError("local guidance: contraflow cost must be >= 0");
   if (cfg_.phases < 0 || cfg_.phases == 1) throw ParamError("local guidance: phases must be 0 or >= 2");
   if (cfg_.phases >= 2) parallel_ = std::make_unique<Parallel>();
 }
@@ -60,7 +63,10 @@ void LocalGuidance::enroll(int i, int sign) {
   for (size_t k = 0; k < p.size(); ++k) {
     const int s = slot(start_[i] + static_cast<int>(k));
     at(p[k], s) += sign;
-    if (k + 1 < p.size() && p[k + 1] != p[k]) leaving(p[k], s, dir(p[k], p[k + 1])) += sign;
+    if (k + 1 < p.size() && p[k + 1] != p[k]) {
+      leaving(p[k], s, dir(p[k], p[k + 1])) += sign;
+      flow_[p[k]][dir(p[k], p[k + 1])] += sign;
+    }
   }
 }
 
@@ -86,7 +92,7 @@ void LocalGuidance::drop_past(int i, int now) {
   for (int s = 0; s < k; ++s) {
     const int sl = slot(start_[i] + s);
     at(p[s], sl) -= 1;
-    if (p[s + 1] != p[s]) leaving(p[s], sl, dir(p[s], p[s + 1])) -= 1;
+    if (p[s + 1] != p[s]) leaving(p[s], sl, dir(p[s], p[s + 1])) -= 1, flow_[p[s]][dir(p[s], p[s + 1])] -= 1;
   }
   p.erase(p.begin(), p.begin() + k);
   start_[i] = now;
@@ -103,15 +109,17 @@ void LocalGuidance::set_path(int i, int now, const std::vector<Cell>& path, Cell
 
 // What a step from -> to at abs_t pays on top of its 1 for meeting other paths: the collision
 // cost (the far one from near_steps ahead on) per kind of conflict met (vertex, swap; or once for
-// either), plus a tiny amount per path met, so that among equal costs the less crowded step wins.
+// either), plus a tiny amount per path met, so that among equal costs the less crowded step wins,
+// plus the contraflow cost per path planned the other way along the edge at any time.
 float LocalGuidance::collision_penalty(Cell from, Cell to, int abs_t, int ahead) const {
+  const float against = from != to ? contraflow_ * flow_[to][dir(to, from)] : 0.f;
   const int vertex = at(to, slot(abs_t + 1));
   const int swap = from != to ? leaving(to, slot(abs_t), dir(to, from)) : 0;
-  if (vertex + swap == 0) return 0.f;
+  if (vertex + swap == 0) return against;
   const bool far = cfg_.far_collision_cost >= 0 && ahead >= cfg_.near_steps;
   const float cost = static_cast<float>(far ? cfg_.far_collision_cost : cfg_.collision_cost);
   const int kinds = cfg_.cost_per_kind ? (vertex > 0) + (swap > 0) : 1;
-  return cost * kinds + 1e-3f * (vertex + swap);
+  return cost * kinds + 1e-3f * (vertex + swap) + against;
 }
 
 bool LocalGuidance::is_valid(const WorldView& world, int i) const {
@@ -164,6 +172,7 @@ bool LocalGuidance::still_optimal(const WorldView& world, int i, std::minstd_ran
     p.push_back(u);
     at(u, slot(t_last + 1)) += 1;
     leaving(last, slot(t_last), dir(last, u)) += 1;
+    flow_[last][dir(last, u)] += 1;
   }
   return true;
 }

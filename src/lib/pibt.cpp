@@ -265,6 +265,7 @@ nlohmann::json PibtPlanner::params() const {
     p["lg_cost_per_kind"] = guidance_->config().cost_per_kind;
     p["lg_far_cost"] = guidance_->config().far_collision_cost;
     p["lg_near_steps"] = guidance_->config().near_steps;
+    p["lg_contraflow"] = guidance_->config().contraflow_cost;
     p["lg_lazy"] = guidance_->config().lazy;
     p["lg_phases"] = guidance_->config().phases;
     p["lg_forecast"] = forecast_ ? forecast_->config().steps : 0;

@@ -161,6 +161,44 @@ TEST(LocalGuidance, RejectsNonsenseConfig) {
   c.collision_cost = 3;
   c.near_steps = -1;
   EXPECT_THROW(LocalGuidance(g, 1, c), ParamError);
+  c.near_steps = 3;
+  c.contraflow_cost = -0.1;
+  EXPECT_THROW(LocalGuidance(g, 1, c), ParamError);
+}
+
+TEST(LocalGuidance, ContraflowSendsAnAgentRoundTheRouteNobodyTakesTheOtherWay) {
+  // Two routes of ten steps from (0,2) to (6,2): over the top row or along the bottom one.
+  // Agent 0 waits in a pocket at (7,0) and, once agent 1 would be through, walks the top row
+  // westwards: no conflict in space and time with either route, but it goes against the top
+  // route's direction. Without a contraflow cost the routes tie (random neighbour order picks
+  // one); with it agent 1 always takes the bottom route.
+  Grid g = Grid::from_rows({"........", ".@@@@@.@", ".@@@@@.@", ".@@@@@.@", ".......@"});
+  DistTable dist(g);
+  const Cell start = g.cell(0, 2), goal = g.cell(6, 2);
+  std::vector<Cell> west(12, g.cell(7, 0));
+  for (int x = 6; x >= 0; --x) west.push_back(g.cell(x, 0));
+  std::vector<Cell> pos = {g.cell(7, 0), start};
+  std::vector<std::vector<Cell>> goals = {{g.cell(0, 0)}, {goal}};
+  WorldView w{g, dist, 0, pos, goals};
+  for (double contraflow : {0.0, 0.1}) {
+    int top = 0;
+    for (uint64_t seed = 1; seed <= 12; ++seed) {
+      LocalGuidanceConfig cfg;
+      cfg.window = 20;
+      cfg.seed = seed;
+      cfg.contraflow_cost = contraflow;
+      LocalGuidance lg(g, 2, cfg);
+      lg.set_path(0, 0, west, goals[0][0]);
+      lg.update(w, {1});
+      const auto p = lg.path_from(1, 0);
+      ASSERT_EQ(p.size(), 11u) << "a shortest path either way";
+      ASSERT_EQ(p.back(), goal);
+      ASSERT_TRUE(is_walk(g, p));
+      top += g.y_of(p[5]) == 0;
+    }
+    if (contraflow > 0) EXPECT_EQ(top, 0) << "against the other agent's direction";
+    else EXPECT_GT(top, 0) << "the routes tie without a contraflow cost";
+  }
 }
 
 TEST(LocalGuidance, PathEndsOnAGoalAnotherAgentRestsOn) {
@@ -463,6 +501,18 @@ TEST(GdRhcrProduct, DefaultGuidanceWindowIs30WithoutCutCellsUpTo2000Agents) {
   };
   EXPECT_EQ(far_cost("random-32-32-20.map"), 2.0);
   EXPECT_EQ(far_cost("warehouse-10-20-10-2-1.map"), -1.0);
+  // The contraflow cost is the product's: not the paper preset's, not the PIBT baseline's.
+  auto contraflow = [](const std::string& planner, const std::string& preset, int agents) {
+    Grid g = Grid::load(repo("maps/warehouse-10-20-10-2-1.map"));
+    Params p;
+    p.set("preset", preset);
+    p.set("guidance", "local");
+    return make_planner(planner, p, g, agents, 1)->params()["lg_contraflow"].get<double>();
+  };
+  EXPECT_EQ(contraflow("gd-rhcr", "default", 400), 0.1);
+  EXPECT_EQ(contraflow("gd-rhcr", "default", 2500), 0.1);
+  EXPECT_EQ(contraflow("gd-rhcr", "paper", 400), 0.0);
+  EXPECT_EQ(contraflow("pibt", "default", 400), 0.0);
 
   Grid g = Grid::load(repo("maps/warehouse-10-20-10-2-1.map"));
   std::vector<std::vector<Cell>> first;

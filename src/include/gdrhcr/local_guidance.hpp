@@ -11,6 +11,13 @@
 // other way is two conflicts to resolve, and guidance that counts it once leads agents into
 // oncoming streams (random-32-32-20, 300 agents: +1.3% throughput; docs/results.md, issue 11).
 //
+// Contraflow (traffic-aware guidance, after Chen, Harabor, Li, Stuckey, "Traffic Flow
+// Optimisation for Lifelong Multi-Agent Path Finding", AAAI 2024): a step along an edge also
+// pays a small cost per guidance path that goes the other way along it anywhere in the window,
+// not only at the same time. Agents then pick lanes, aisles and doors that others use in their
+// own direction, and streams stop meeting head-on (issue 11, session 8: warehouse-10-20-10-2-1
+// 800 +4%, random-32-32-20 300 +3%, room maps +4-7%).
+//
 // With the motion forecast (maps with many cut cells), conflicts 3 or more steps ahead cost 2
 // instead of 3 (far_collision_cost): random-32-32-20 300, seeds 1-10, +1.3%; on warehouses,
 // without the forecast, it loses 1.6-2% (docs/results.md, issue 11, session 7).
@@ -35,6 +42,7 @@
 // the number of threads.
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -56,6 +64,10 @@ struct LocalGuidanceConfig {
   // instead (< 0: collision_cost): the further ahead, the less the others' paths foretell.
   double far_collision_cost = -1;
   int near_steps = 3;
+  // Traffic: a step along an edge pays this per guidance path planned the other way along it at
+  // any time in the window (contraflow), so streams through a door or an aisle keep one
+  // direction instead of meeting head-on later (0 = none).
+  double contraflow_cost = 0;
   // false: replan every agent every step unless its kept path is provably as good (it meets
   // nobody and gains a step on the goal every step); true: keep paths until they are left,
   // the goal changes, they meet another path or less than `keep` steps are left (cheaper).
@@ -171,6 +183,9 @@ class LocalGuidance {
     uint16_t leaving[4];
   };
   std::vector<Occupancy> occ_;
+  // Per cell and direction: guidance paths leaving the cell that way at any time (contraflow).
+  std::vector<std::array<uint16_t, 4>> flow_;
+  float contraflow_;
   uint16_t& at(Cell c, int s) { return occ_[static_cast<size_t>(c) * slots_ + s].at; }
   uint16_t at(Cell c, int s) const { return occ_[static_cast<size_t>(c) * slots_ + s].at; }
   uint16_t& leaving(Cell c, int s, int d) { return occ_[static_cast<size_t>(c) * slots_ + s].leaving[d]; }
