@@ -331,6 +331,56 @@ void LocalGuidance::update_banded(const WorldView& world, const std::vector<int>
   for (auto& c : counts) counts_.add(c);
 }
 
+void LocalGuidance::Marks::start(size_t pairs) {
+  const bool hash = pairs * sizeof(Mark) > kDirectMarksBytes;
+  if (table.empty() || hash != hashed || (!hash && table.size() != pairs)) {
+    hashed = hash;
+    bits = 10;
+    table.assign(hash ? size_t{1} << bits : pairs, Mark{0, 0, 0.f});
+    stamp = 0;
+  }
+  if (++stamp >= (1u << 31)) {  // tags are 2 x stamp (+ 1): start over before they wrap
+    std::fill(table.begin(), table.end(), Mark{0, 0, 0.f});
+    stamp = 1;
+  }
+  used = 0;
+}
+
+LocalGuidance::Mark& LocalGuidance::Marks::find(uint32_t key) {
+  if (!hashed) return table[key];
+  const uint32_t live = 2 * stamp;
+  for (;;) {
+    const size_t mask = table.size() - 1;
+    for (size_t h = (key * 0x9E3779B1u) >> (32 - bits);; h = (h + 1) & mask) {
+      Mark& m = table[h];
+      if (m.tag >= live) {  // taken in this search
+        if (m.key == key) return m;
+        continue;
+      }
+      if (2 * (used + 1) > table.size()) break;  // at most half full
+      ++used;
+      m = Mark{key, live - 2, 0.f};  // unseen by this search
+      return m;
+    }
+    grow();
+  }
+}
+
+// Doubles the hashed table, keeping this search's entries.
+void LocalGuidance::Marks::grow() {
+  std::vector<Mark> old(size_t{1} << (bits + 1), Mark{0, 0, 0.f});
+  old.swap(table);
+  ++bits;
+  const uint32_t live = 2 * stamp;
+  const size_t mask = table.size() - 1;
+  for (const Mark& m : old) {
+    if (m.tag < live) continue;
+    size_t h = (m.key * 0x9E3779B1u) >> (32 - bits);
+    while (table[h].tag >= live) h = (h + 1) & mask;
+    table[h] = m;
+  }
+}
+
 // Space-time A* over (t, cell), t = 0..W: cost 1 per step plus its collision penalty (meeting
 // other paths); heuristic the distance to the goal.
 // Among equal f the deeper node goes first, so free paths are found almost without branching.
@@ -349,20 +399,12 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
   }
   const auto row_ptr = world.dist.row(goal);
   const DistRow& row = *row_ptr;
-  const size_t cells = grid_.num_cells();
-  const size_t table = static_cast<size_t>(slots_) * cells;
-  if (search.marks.size() != table) {
-    search.marks.assign(table, Mark{0, 0, 0.f});
-    search.stamp = 0;
-  }
-  if (++search.stamp == 0) {
-    std::fill(search.marks.begin(), search.marks.end(), Mark{0, 0, 0.f});
-    search.stamp = 1;
-  }
   auto& marks = search.marks;
+  marks.start(static_cast<size_t>(slots_) * grid_.num_cells());
   auto& nodes = search.nodes;
   auto& open = search.open;
-  const uint32_t stamp = search.stamp;
+  const uint32_t seen = 2 * marks.stamp, closed = seen + 1;
+  auto key = [&](Cell v, int t) { return static_cast<uint32_t>(v) * static_cast<uint32_t>(slots_) + static_cast<uint32_t>(t); };
   nodes.clear();
   open.clear();
   auto worse = [](const OpenEntry& x, const OpenEntry& y) {
@@ -378,9 +420,9 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
     const int32_t id = open.back().id;
     open.pop_back();
     const Node n = nodes[id];
-    uint32_t& mark = marks[static_cast<size_t>(n.v) * slots_ + n.t].closed;
-    if (mark == stamp) continue;
-    mark = stamp;
+    Mark& mark = marks.find(key(n.v, n.t));
+    if (mark.tag == closed) continue;
+    mark.tag = closed;
     // Done on the goal (the agent gets its next goal there): that path, even when a deeper node
     // was popped before it. Such a node is no cheaper and does not reach the goal; following
     // it (waiting beside a goal another agent rests on, where stepping in costs a collision at
@@ -393,13 +435,13 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
     // Done at the window's end (or out of expansions: the deepest cheapest node so far).
     if (n.t == W || ++expanded > cfg_.max_expansions) break;
     auto expand = [&](Cell u) {
-      Mark& mk = marks[static_cast<size_t>(u) * slots_ + n.t + 1];
-      if (mk.closed == stamp) return;
+      Mark& mk = marks.find(key(u, n.t + 1));
+      if (mk.tag == closed) return;
       const int h = row[u];
       if (h >= kUnreachable) return;
       const float g = n.g + 1.f + collision_penalty(n.v, u, world.timestep + n.t, n.t);
-      if (mk.seen == stamp && mk.best_g <= g) return;  // reached as cheaply before
-      mk.seen = stamp;
+      if (mk.tag == seen && mk.best_g <= g) return;  // reached as cheaply before
+      mk.tag = seen;
       mk.best_g = g;
       nodes.push_back({g, g + h, n.t + 1, u, id});
       open.push_back({g + h, n.t + 1, static_cast<int32_t>(nodes.size() - 1)});

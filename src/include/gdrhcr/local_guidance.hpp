@@ -134,17 +134,28 @@ class LocalGuidance {
     long searches = 0, expansions = 0, cut_short = 0, kept = 0;
     void add(const Counts& o);
   };
-  // Per (cell, t): closed and seen marks (stamps of the search that set them) and the best g
-  // seen, side by side so a look-up touches one cache line.
+  // What one search knows of a (cell, t) pair: whether it reached it (tag = 2 x the search's
+  // stamp) or closed it (+ 1), and the best g it saw; entries of earlier searches have older
+  // tags. On small maps one entry per (cell, t) of the map (key = cell x slots + t); where that
+  // table would pass kDirectMarksBytes, an open-addressing table of the pairs the search reached
+  // (a few hundred), which stays in cache: warehouse-10-20-10-2-1, 800 agents, 6% less CPU.
   struct Mark {
-    uint32_t closed, seen;
+    uint32_t key;
+    uint32_t tag;
     float best_g;
   };
-  // One search's scratch: marks per (cell, t), node pool, open list. One per thread in the
-  // parallel update (marks are stamps, so which one a band gets does not matter).
+  static constexpr size_t kDirectMarksBytes = size_t{1} << 20;
+  struct Marks {
+    std::vector<Mark> table;
+    uint32_t stamp = 0, used = 0, bits = 0;
+    bool hashed = false;
+    void start(size_t pairs);  // a new search over `pairs` (cell, t) pairs
+    Mark& find(uint32_t key);  // the pair's entry (unseen: tag < 2 x stamp)
+    void grow();
+  };
+  // One search's scratch: marks, node pool, open list. One per thread in the parallel update.
   struct Search {
-    std::vector<Mark> marks;
-    uint32_t stamp = 0;
+    Marks marks;
     std::vector<Node> nodes;
     std::vector<OpenEntry> open;
     std::vector<Cell> walk;  // probe_free_path's walk
