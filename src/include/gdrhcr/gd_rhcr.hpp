@@ -61,9 +61,10 @@ struct GdRhcrConfig {
   // The paper's exact configuration (PBS + plain PIBT, K_threshold = min(floor(0.1 k), 20)):
   // `--preset paper`, used by the paper-reproduction figures.
   static GdRhcrConfig paper();
-  // The product default: as the paper, but big or crowded groups (local density above 5%)
+  // The product default: as the paper, but big or crowded groups (local density above 2%)
   // go to PIBT with swap following local guidance, and guidance paths stand for those agents
-  // in the other groups' soft constraints.
+  // in the other groups' soft constraints. The guidance's window, forecast and costs (contraflow
+  // included) are set per map and fleet size by the planner registry (planner_registry.cpp).
   static GdRhcrConfig product();
 };
 
