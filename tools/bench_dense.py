@@ -61,7 +61,6 @@ ABLATION = [
     ("PIBT + reset + swap (our PIBT)", ["--planner", "pibt"]),
     ("PIBT + reset + swap, random tie-break", ["--planner", "pibt", "--tie-break", "random"]),
     ("PIBT + local guidance, lazy", ["--planner", "pibt", "--guidance", "local", "--lg-lazy", "1"]),
-    ("PIBT + local guidance, keep provably optimal paths", ["--planner", "pibt", "--guidance", "local", "--lg-keep-optimal", "1"]),
     ("PIBT + local guidance (every step)", ["--planner", "pibt", "--guidance", "local"]),
     ("GD-RHCR paper + swap", ["--planner", "gd-rhcr", "--preset", "paper", "--swap", "1"]),
     ("GD-RHCR default without the density rule", ["--planner", "gd-rhcr", "--max-density", "1"]),

@@ -3,8 +3,8 @@
 //   gdrhcr_sim --map maps/warehouse-10-20-10-2-1.map --tasks mapd --planner pibt \
 //              --agents 400 --steps 500 --seed 1 --out result.json [--paths paths.txt]
 //
-// Planner parameters (--H, --alpha, --V, ...) are passed through to the planner, which rejects
-// the ones it does not know.
+// Planner parameters (--H, --alpha, --V, ...) are read against the planner's parameter table
+// (planner_params.hpp); `--list-params` prints it with the values in force for the map and fleet.
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -12,6 +12,7 @@
 
 #include "gdrhcr/distinct_goal_stream.hpp"
 #include "gdrhcr/lorr_io.hpp"
+#include "gdrhcr/planner_params.hpp"
 #include "gdrhcr/simulator.hpp"
 #include "gdrhcr/validator.hpp"
 
@@ -41,7 +42,25 @@ const char* kUsage =
     "  --out FILE          write the result JSON here (default: standard output)\n"
     "  --paths FILE        write executed paths, one line per agent: 'i: (x,y),(x,y),...'\n"
     "  --quiet             no summary on standard error\n"
-    "  planner options     e.g. --H 20 --alpha 5 --timeout 60 --V 2 --c-soft 1 --threads 2\n";
+    "  --list-params       print the planner's parameters with the values in force for --map and\n"
+    "                      --agents (or --lorr-problem), then exit\n"
+    "  --PARAM VALUE       a planner parameter; each planner's are listed below\n";
+
+// Every planner's parameters: name, range, default (or the rule that picks it), meaning.
+std::string parameter_help() {
+  std::string out;
+  for (auto& name : planner_names()) {
+    out += "\n--planner " + name + " parameters (range, default or the rule picking it from the map and fleet):\n";
+    for (auto& s : planner_param_specs(name)) {
+      std::string def = s.rule.empty() ? s.value : "rule " + s.rule;
+      if (!s.paper.empty()) def += " (paper " + s.paper + ")";
+      out += "  --" + s.name + " " + s.range_text() + ", default " + def + ": " + s.meaning + "\n";
+    }
+  }
+  out += "\nrules:\n";
+  for (auto& r : param_rules()) out += "  " + r.name + ": " + r.why + "\n";
+  return out;
+}
 
 std::string planner_list() {
   std::string s;
@@ -59,18 +78,16 @@ void write_paths(const Grid& grid, const SimResult& r, const std::string& path) 
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  Params args;
-  bool quiet = false;
+// The command line as parameters; flags (no value) apart. Returns an exit code, or -1 to go on.
+struct Flags {
+  bool quiet = false, help = false, list_params = false;
+};
+int parse_args(int argc, char** argv, Params& args, Flags& flags) {
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
-    if (a == "-h" || a == "--help") {
-      std::printf(kUsage, planner_list().c_str());
-      return 0;
-    }
-    if (a == "--quiet") { quiet = true; continue; }
+    if (a == "-h" || a == "--help") { flags.help = true; continue; }
+    if (a == "--quiet") { flags.quiet = true; continue; }
+    if (a == "--list-params") { flags.list_params = true; continue; }
     if (a.rfind("--", 0) != 0 || a.size() < 3) {
       std::fprintf(stderr, "gdrhcr_sim: unexpected argument '%s' (options start with --)\n", a.c_str());
       return 2;
@@ -91,118 +108,167 @@ int main(int argc, char** argv) {
     }
     args.set(key, value);
   }
-  try {
-    const std::string lorr_path = args.get_string("lorr-problem", "");
-    const std::string lorr_out = args.get_string("lorr-out", "");
-    std::unique_ptr<LorrProblem> lorr;
-    if (!lorr_path.empty()) {
-      for (const char* k : {"map", "agents", "tasks", "pickups", "deliveries"})
-        if (args.has(k)) throw ParamError(std::string("--") + k + " cannot be combined with --lorr-problem (the problem file sets it)");
-      lorr = std::make_unique<LorrProblem>(load_lorr_problem(lorr_path));
-    }
-    const std::string map_path = lorr ? lorr->map_path : args.get_string("map", "");
-    if (map_path.empty()) throw ParamError("--map is required\n" + std::string("run with --help for the options"));
-    const std::string task_kind = lorr ? "lorr" : args.get_choice("tasks", "random", {"random", "mapd"});
-    const std::string pickups_file = args.get_string("pickups", "");
-    const std::string deliveries_file = args.get_string("deliveries", "");
-    const std::string planner_name = args.get_string("planner", "pibt");
-    const int agents = lorr ? lorr->team_size : args.get_int("agents", 100, 1, 10000000);
-    const int steps = args.get_int("steps", 500, 1, 100000000);
-    const uint64_t seed = args.get_u64("seed", 0);
-    const int lookahead = args.get_int("lookahead", lorr ? lorr->num_tasks_reveal : 3, 1, 1000);
-    const int budget_mb = args.get_int("dist-budget-mb", 256, 1, 1 << 20);
-    const bool distinct_goals = args.get_int("distinct-goals", 0, 0, 1) == 1;
-    const std::string out_path = args.get_string("out", "");
-    const std::string paths_path = args.get_string("paths", "");
-    if (task_kind == "random" && (!pickups_file.empty() || !deliveries_file.empty()))
-      throw ParamError("--pickups/--deliveries only apply to --tasks mapd");
+  return -1;
+}
 
-    const Grid grid = lorr ? std::move(lorr->grid) : Grid::load(map_path);
-    DistTable dist(grid, size_t(budget_mb) << 20);
-    std::unique_ptr<TaskStream> tasks;
-    nlohmann::json task_info = {{"kind", task_kind}};
-    TaskListStream* task_list = nullptr;
-    if (lorr) {
-      auto list = std::make_unique<TaskListStream>(grid, lorr->tasks, lorr->team_size, lorr->strategy);
-      task_list = list.get();
-      tasks = std::move(list);
-      task_info = {{"kind", "lorr"}, {"problem", lorr_path}, {"tasks", lorr->tasks.size()},
-                   {"strategy", TaskListStream::to_string(lorr->strategy)}, {"num_tasks_reveal", lorr->num_tasks_reveal}};
-    } else if (task_kind == "random") {
-      tasks = std::make_unique<RandomNavigationStream>(grid, seed);
-    } else {
-      MapdCells cells = mapd_cells_for_map(grid, map_path);
-      if (!pickups_file.empty()) cells.pickups = load_cell_list(grid, pickups_file), cells.rule = "given lists";
-      if (!deliveries_file.empty()) cells.deliveries = load_cell_list(grid, deliveries_file), cells.rule = "given lists";
-      task_info["rule"] = cells.rule;
-      task_info["pickups"] = cells.pickups.size();
-      task_info["deliveries"] = cells.deliveries.size();
-      tasks = std::make_unique<PickupDeliveryStream>(grid, cells.pickups, cells.deliveries, seed);
-    }
-    if (distinct_goals) {
-      if (lorr) throw ParamError("--distinct-goals cannot be combined with --lorr-problem (its task list is fixed)");
-      tasks = std::make_unique<DistinctGoalStream>(std::move(tasks));
-      task_info["distinct_goals"] = true;
-    }
-    const std::vector<Cell> starts = lorr ? lorr->starts : random_starts(grid, agents, seed);
-    auto planner = make_planner(planner_name, args, grid, agents, seed);
-    args.check_all_used("gdrhcr_sim --planner " + planner_name);
+// The run's options (everything but the planner's own parameters).
+struct RunOptions {
+  std::string lorr_path, lorr_out, map_path, task_kind, pickups_file, deliveries_file, planner;
+  std::string out_path, paths_path;
+  int agents = 100, steps = 500, lookahead = 3, budget_mb = 256;
+  uint64_t seed = 0;
+  bool distinct_goals = false;
+  std::unique_ptr<LorrProblem> lorr;
+};
 
-    SimOptions opt;
-    opt.steps = steps;
-    opt.lookahead = lookahead;
-    opt.record_paths = !paths_path.empty() || !lorr_out.empty();
-    RecordingTaskStream recorded(*tasks);
-    const SimResult r = run_simulation(grid, dist, recorded, *planner, starts, opt);
+RunOptions read_options(Params& args) {
+  RunOptions o;
+  o.lorr_path = args.get_string("lorr-problem", "");
+  o.lorr_out = args.get_string("lorr-out", "");
+  if (!o.lorr_path.empty()) {
+    for (const char* k : {"map", "agents", "tasks", "pickups", "deliveries"})
+      if (args.has(k)) throw ParamError(std::string("--") + k + " cannot be combined with --lorr-problem (the problem file sets it)");
+    o.lorr = std::make_unique<LorrProblem>(load_lorr_problem(o.lorr_path));
+  }
+  o.map_path = o.lorr ? o.lorr->map_path : args.get_string("map", "");
+  if (o.map_path.empty()) throw ParamError("--map is required\n" + std::string("run with --help for the options"));
+  o.task_kind = o.lorr ? "lorr" : args.get_choice("tasks", "random", {"random", "mapd"});
+  o.pickups_file = args.get_string("pickups", "");
+  o.deliveries_file = args.get_string("deliveries", "");
+  o.planner = args.get_string("planner", "pibt");
+  o.agents = o.lorr ? o.lorr->team_size : args.get_int("agents", 100, 1, 10000000);
+  o.steps = args.get_int("steps", 500, 1, 100000000);
+  o.seed = args.get_u64("seed", 0);
+  o.lookahead = args.get_int("lookahead", o.lorr ? o.lorr->num_tasks_reveal : 3, 1, 1000);
+  o.budget_mb = args.get_int("dist-budget-mb", 256, 1, 1 << 20);
+  o.distinct_goals = args.get_int("distinct-goals", 0, 0, 1) == 1;
+  o.out_path = args.get_string("out", "");
+  o.paths_path = args.get_string("paths", "");
+  if (o.task_kind == "random" && (!o.pickups_file.empty() || !o.deliveries_file.empty()))
+    throw ParamError("--pickups/--deliveries only apply to --tasks mapd");
+  return o;
+}
 
-    nlohmann::json j = r.to_json();
-    j["map"] = map_path;
-    j["planner"] = planner->name();
-    j["seed"] = seed;
-    j["tasks"] = task_info;
-    nlohmann::json params = planner->params();
-    params["steps"] = steps;
-    params["agents"] = agents;
-    params["seed"] = seed;
-    params["tasks"] = task_kind;
-    params["lookahead"] = lookahead;
-    params["dist_budget_mb"] = budget_mb;
-    j["params"] = params;
-    j["stats"] = planner->stats();
-    j["dist_table"] = {{"rows_cached", dist.cached_rows()},
-                       {"bytes_cached", dist.cached_bytes()},
-                       {"bytes_peak", dist.peak_bytes()},
-                       {"bytes_per_row", dist.row_bytes()},
-                       {"index_bytes", dist.index_bytes()},
-                       {"budget_bytes", dist.budget_bytes()},
-                       {"bfs_runs", dist.bfs_count()},
-                       {"evictions", dist.evictions()},
-                       {"over_budget_inserts", dist.over_budget_inserts()}};
-    if (!paths_path.empty()) write_paths(grid, r, paths_path);
-    if (!lorr_out.empty()) {
-      std::vector<std::vector<long>> ids;
-      if (task_list)
-        for (int i = 0; i < agents; ++i) ids.push_back(task_list->assigned_ids(i));
-      std::ofstream lo(lorr_out);
-      if (!lo) throw std::runtime_error("cannot write " + lorr_out);
-      lo << lorr_output(grid, r.paths, recorded.goals(), lookahead, ids).dump() << "\n";
-    }
-    const std::string text = j.dump(2) + "\n";
-    if (out_path.empty()) {
-      std::cout << text;
-    } else {
-      std::ofstream out(out_path);
-      if (!out) throw std::runtime_error("cannot write " + out_path);
-      out << text;
-    }
-    if (!quiet)
-      std::fprintf(stderr,
-                   "%s on %s, %d agents, %d steps: throughput %.3f (free flow %.3f), %ld goals, "
-                   "0 collisions, plan time mean %.6f s max %.6f s, wall %.2f s\n",
-                   planner->name().c_str(), map_path.c_str(), agents, steps, r.throughput,
-                   r.free_flow_throughput, r.goals_reached, r.plan_time_mean_s, r.plan_time_max_s,
-                   r.wall_time_s);
+// The task stream the options ask for; `info` describes it for the result record.
+std::unique_ptr<TaskStream> make_tasks(const RunOptions& o, const Grid& grid, nlohmann::json& info,
+                                       TaskListStream*& task_list) {
+  std::unique_ptr<TaskStream> tasks;
+  info = {{"kind", o.task_kind}};
+  if (o.lorr) {
+    auto list = std::make_unique<TaskListStream>(grid, o.lorr->tasks, o.lorr->team_size, o.lorr->strategy);
+    task_list = list.get();
+    tasks = std::move(list);
+    info = {{"kind", "lorr"}, {"problem", o.lorr_path}, {"tasks", o.lorr->tasks.size()},
+            {"strategy", TaskListStream::to_string(o.lorr->strategy)}, {"num_tasks_reveal", o.lorr->num_tasks_reveal}};
+  } else if (o.task_kind == "random") {
+    tasks = std::make_unique<RandomNavigationStream>(grid, o.seed);
+  } else {
+    MapdCells cells = mapd_cells_for_map(grid, o.map_path);
+    if (!o.pickups_file.empty()) cells.pickups = load_cell_list(grid, o.pickups_file), cells.rule = "given lists";
+    if (!o.deliveries_file.empty()) cells.deliveries = load_cell_list(grid, o.deliveries_file), cells.rule = "given lists";
+    info["rule"] = cells.rule;
+    info["pickups"] = cells.pickups.size();
+    info["deliveries"] = cells.deliveries.size();
+    tasks = std::make_unique<PickupDeliveryStream>(grid, cells.pickups, cells.deliveries, o.seed);
+  }
+  if (o.distinct_goals) {
+    if (o.lorr) throw ParamError("--distinct-goals cannot be combined with --lorr-problem (its task list is fixed)");
+    tasks = std::make_unique<DistinctGoalStream>(std::move(tasks));
+    info["distinct_goals"] = true;
+  }
+  return tasks;
+}
+
+// The result record: the run's figures, every parameter in force and where its value came from.
+nlohmann::json result_json(const RunOptions& o, const SimResult& r, const Planner& planner,
+                           const PlannerParams& values, const nlohmann::json& task_info, const DistTable& dist) {
+  nlohmann::json j = r.to_json();
+  j["map"] = o.map_path;
+  j["planner"] = planner.name();
+  j["seed"] = o.seed;
+  j["tasks"] = task_info;
+  nlohmann::json params = values.to_json();
+  params["steps"] = o.steps;
+  params["agents"] = o.agents;
+  params["seed"] = o.seed;
+  params["tasks"] = o.task_kind;
+  params["lookahead"] = o.lookahead;
+  params["dist_budget_mb"] = o.budget_mb;
+  j["params"] = params;
+  for (auto& v : values.values()) j["param_sources"][v.spec->name] = v.source;
+  j["stats"] = planner.stats();
+  j["dist_table"] = {{"rows_cached", dist.cached_rows()},       {"bytes_cached", dist.cached_bytes()},
+                     {"bytes_peak", dist.peak_bytes()},         {"bytes_per_row", dist.row_bytes()},
+                     {"index_bytes", dist.index_bytes()},       {"budget_bytes", dist.budget_bytes()},
+                     {"bfs_runs", dist.bfs_count()},            {"evictions", dist.evictions()},
+                     {"over_budget_inserts", dist.over_budget_inserts()}};
+  return j;
+}
+
+void write_text(const std::string& path, const std::string& text) {
+  if (path.empty()) {
+    std::cout << text;
+    return;
+  }
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write " + path);
+  out << text;
+}
+
+int run(Params& args, const Flags& flags) {
+  const RunOptions o = read_options(args);
+  const Grid grid = o.lorr ? std::move(o.lorr->grid) : Grid::load(o.map_path);
+  const PlannerParams values = PlannerParams::resolve(o.planner, args, MapFacts(grid, o.agents));
+  args.check_all_used("gdrhcr_sim --planner " + o.planner);
+  if (flags.list_params) {
+    std::printf("%s parameters for %s, %d agents (preset %s):\n%s", o.planner.c_str(), o.map_path.c_str(), o.agents,
+                values.preset().c_str(), values.format().c_str());
     return 0;
+  }
+  DistTable dist(grid, size_t(o.budget_mb) << 20);
+  nlohmann::json task_info;
+  TaskListStream* task_list = nullptr;
+  std::unique_ptr<TaskStream> tasks = make_tasks(o, grid, task_info, task_list);
+  const std::vector<Cell> starts = o.lorr ? o.lorr->starts : random_starts(grid, o.agents, o.seed);
+  auto planner = make_planner(values, grid, o.agents, o.seed);
+
+  SimOptions opt;
+  opt.steps = o.steps;
+  opt.lookahead = o.lookahead;
+  opt.record_paths = !o.paths_path.empty() || !o.lorr_out.empty();
+  RecordingTaskStream recorded(*tasks);
+  const SimResult r = run_simulation(grid, dist, recorded, *planner, starts, opt);
+
+  if (!o.paths_path.empty()) write_paths(grid, r, o.paths_path);
+  if (!o.lorr_out.empty()) {
+    std::vector<std::vector<long>> ids;
+    if (task_list)
+      for (int i = 0; i < o.agents; ++i) ids.push_back(task_list->assigned_ids(i));
+    write_text(o.lorr_out, lorr_output(grid, r.paths, recorded.goals(), o.lookahead, ids).dump() + "\n");
+  }
+  write_text(o.out_path, result_json(o, r, *planner, values, task_info, dist).dump(2) + "\n");
+  if (!flags.quiet)
+    std::fprintf(stderr,
+                 "%s on %s, %d agents, %d steps: throughput %.3f (free flow %.3f), %ld goals, "
+                 "0 collisions, plan time mean %.6f s max %.6f s, wall %.2f s\n",
+                 planner->name().c_str(), o.map_path.c_str(), o.agents, o.steps, r.throughput, r.free_flow_throughput,
+                 r.goals_reached, r.plan_time_mean_s, r.plan_time_max_s, r.wall_time_s);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Params args;
+  Flags flags;
+  if (const int code = parse_args(argc, argv, args, flags); code >= 0) return code;
+  if (flags.help) {
+    std::printf(kUsage, planner_list().c_str());
+    std::printf("%s", parameter_help().c_str());
+    return 0;
+  }
+  try {
+    return run(args, flags);
   } catch (const CollisionError& e) {
     std::fprintf(stderr, "gdrhcr_sim: COLLISION (planner bug): %s\n", e.what());
     return 3;

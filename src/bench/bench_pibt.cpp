@@ -7,7 +7,7 @@
 #include <cstring>
 #include <string>
 
-#include "gdrhcr/pibt.hpp"
+#include "gdrhcr/guided_pibt.hpp"
 #include "gdrhcr/simulator.hpp"
 
 using namespace gdrhcr;

@@ -12,7 +12,6 @@
 #include <tbb/task_arena.h>
 
 #include "gdrhcr/pbs.hpp"
-#include "gdrhcr/soft_constraint_table.hpp"
 #include "gdrhcr/validator.hpp"
 #include "tsan_annotations.hpp"
 
@@ -47,9 +46,17 @@ struct GdRhcrPlanner::Plan {
 struct GdRhcrPlanner::Job {
   size_t group_index = 0;
   const std::vector<int>* agents = nullptr;
-  Clock::time_point deadline = Clock::time_point::max();  // of the primary solves (step budget)
   PbsResult result;
   bool budget_skipped = false;  // not started: the step budget was used up
+};
+
+// What one step decided for its groups.
+struct GdRhcrPlanner::StepWork {
+  std::vector<Job> jobs;                 // groups the primary solver replans
+  std::vector<size_t> secondary_groups;  // groups the secondary solver moves
+  std::vector<int> secondary;            // their agents, and the agents the final check re-moved
+  std::vector<uint8_t> on_secondary;     // per agent
+  double max_solve_time = 0;             // the step's plan-time metric
 };
 
 struct GdRhcrPlanner::Arena {
@@ -58,11 +65,6 @@ struct GdRhcrPlanner::Arena {
 };
 
 namespace {
-// The paper's default K_threshold = min(floor(0.1 k), 20). Below 20 agents that formula gives
-// 0 or 1 and would send every group, even a lone agent, to the secondary solver; the floor of 2
-// keeps single agents on the primary solver.
-int default_k_threshold(int num_agents) { return std::max(2, std::min(num_agents / 10, 20)); }
-
 // The smallest box (x0, y0, x1, y1) holding the agents' cells.
 std::array<int, 4> bounding_box(const Grid& grid, const WorldView& world, const std::vector<int>& agents) {
   int x0 = grid.width(), x1 = -1, y0 = grid.height(), y1 = -1;
@@ -74,33 +76,28 @@ std::array<int, 4> bounding_box(const Grid& grid, const WorldView& world, const 
   }
   return {x0, y0, x1, y1};
 }
+
+// One soft-constraint table per thread, reused: clearing it costs what was added, not the map's size.
+SoftConstraintTable& thread_soft_table(const Grid& grid) {
+  thread_local std::unique_ptr<SoftConstraintTable> table;
+  thread_local const Grid* table_grid = nullptr;
+  thread_local int table_cells = 0;
+  if (!table || table_grid != &grid || table_cells != grid.num_cells()) {
+    table = std::make_unique<SoftConstraintTable>(grid);
+    table_grid = &grid;
+    table_cells = grid.num_cells();
+  }
+  table->clear();
+  return *table;
+}
 }  // namespace
-
-GdRhcrConfig GdRhcrConfig::paper() {
-  GdRhcrConfig c;
-  c.pibt = plain_pibt();
-  c.guidance = false;
-  c.max_density = 1.0;
-  return c;
-}
-
-GdRhcrConfig GdRhcrConfig::product() {
-  GdRhcrConfig c;
-  c.pibt = PibtOptions{};
-  c.guidance = true;
-  // PBS only for groups with (almost) nobody within density_margin cells: with guidance, PIBT
-  // does as well or better wherever two groups are near (issue 11: 0.02 against 0.05, seeds
-  // 1-3: warehouse-10-20-10-2-1 100 / 400 / 800 agents +0.8% / +1.3% / +0.4%,
-  // warehouse-10-20-10-2-2 800 +0.4%, random-32-32-20 and empty-48-48 within +-0.2%).
-  c.max_density = 0.02;
-  return c;
-}
 
 GdRhcrPlanner::GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, GdRhcrConfig config)
     : grid_(grid),
       seed_(seed),
       cfg_(std::move(config)),
-      k_threshold_(cfg_.k_threshold > 0 ? cfg_.k_threshold : default_k_threshold(num_agents)),
+      // The paper's K_threshold = min(floor(0.1 k), 20), floored at 2 (planner_params.cpp's rule).
+      k_threshold_(cfg_.k_threshold > 0 ? cfg_.k_threshold : std::max(2, std::min(num_agents / 10, 20))),
       partition_(grid),
       pibt_(grid, num_agents, seed, cfg_.pibt),
       guidance_(cfg_.guidance ? std::make_unique<LocalGuidance>(grid, num_agents, cfg_.lg) : nullptr),
@@ -108,11 +105,10 @@ GdRhcrPlanner::GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, Gd
                     ? std::make_unique<MotionForecast>(grid, num_agents, cfg_.forecast, cfg_.lg)
                     : nullptr),
       validator_(grid),
+      density_(grid),
       plan_of_(num_agents),
       slot_of_(num_agents, 0),
-      arena_(std::make_unique<Arena>(std::max(1, cfg_.threads))),
-      last_secondary_(num_agents, std::numeric_limits<int>::min() / 2),
-      last_sent_(num_agents, std::numeric_limits<int>::min() / 2) {
+      arena_(std::make_unique<Arena>(std::max(1, cfg_.threads))) {
   if (cfg_.V < 0) throw ParamError("gd-rhcr: V must be >= 0, got " + std::to_string(cfg_.V));
   if (cfg_.H < 1) throw ParamError("gd-rhcr: H must be >= 1, got " + std::to_string(cfg_.H));
   if (!(cfg_.c_soft >= 0)) throw ParamError("gd-rhcr: c_soft must be >= 0");
@@ -120,17 +116,175 @@ GdRhcrPlanner::GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, Gd
   if (!(cfg_.timeout_s > 0)) throw ParamError("gd-rhcr: timeout must be > 0");
   if (!(cfg_.step_budget_s >= 0)) throw ParamError("gd-rhcr: step budget must be >= 0 seconds");
   if (cfg_.node_budget < 0) throw ParamError("gd-rhcr: node budget must be >= 0");
-  if (cfg_.secondary_stay < 0) throw ParamError("gd-rhcr: secondary stay must be >= 0 steps");
   if (cfg_.solver != "pbs" && cfg_.solver != "pibt")
     throw ParamError("gd-rhcr: solver must be pbs or pibt, got '" + cfg_.solver + "'");
-  if (cfg_.solver2 != "pibt")
-    throw ParamError("gd-rhcr: solver2 must be pibt, got '" + cfg_.solver2 + "'");
 }
 
 GdRhcrPlanner::~GdRhcrPlanner() = default;
 
-int GdRhcrPlanner::offset_of(int agent, int t) const {
-  return plan_of_[agent] ? t - plan_of_[agent]->start_time : 0;
+// Algorithm 1, one timestep.
+StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& next) {
+  StepWork work;
+  begin_step(world);
+  assign_groups(world, work);        // groups, and which solver moves each (lines 3-10, 19)
+  solve_groups(world, work);         // the replanned groups, in parallel (lines 11-12)
+  adopt_plans(world, work);          // lambda_i <- P; failed solves to the secondary solver (13-16)
+  move_agents(world, work, next);    // advance along lambda_i; the secondary solver moves the rest
+  merge_and_repair(world, work, next);
+  record_step(work);
+  return {!work.jobs.empty() || !work.secondary.empty(), work.max_solve_time};
+}
+
+// Line 3: the groups (connected components at distance <= V), and what every solve of this step
+// reads: the density around groups, agents by map block, the step budget, the taken cells.
+void GdRhcrPlanner::begin_step(const WorldView& world) {
+  now_ = world.timestep;
+  budget_ = StepBudget(StepBudget::Clock::now(), cfg_.step_budget_s);
+  partition_.compute(world.positions, cfg_.V);
+  if (cfg_.max_density < 1.0) density_.count(world.positions);
+  index_agents(world);
+  taken_cells_ = world.taken_cells();
+  taken_at_ = world.taken_cell_mask();
+}
+
+// The product's density rule: a group in a crowded neighbourhood goes to the secondary solver.
+bool GdRhcrPlanner::crowded(const WorldView& world, const std::vector<int>& group) const {
+  return cfg_.max_density < 1.0 &&
+         density_.around(bounding_box(grid_, world, group), cfg_.density_margin) > cfg_.max_density;
+}
+
+// Each group goes to the secondary solver (K_threshold, or crowded), the primary solver (its
+// cached plan does not hold: the lazy test), or reuses its plan.
+void GdRhcrPlanner::assign_groups(const WorldView& world, StepWork& work) {
+  const auto& groups = partition_.groups();
+  last_groups_.assign(groups.size(), GroupInfo{});
+  for (size_t g = 0; g < groups.size(); ++g) {
+    last_groups_[g].agents = groups[g];
+    const bool crowd = crowded(world, groups[g]);
+    if (crowd) ++density_fallbacks_;
+    if (static_cast<int>(groups[g].size()) >= k_threshold_ || cfg_.solver == "pibt" || crowd) {
+      last_groups_[g].action = GroupAction::ThresholdFallback;
+      work.secondary_groups.push_back(g);
+    } else if (needs_replan(world, groups[g])) {
+      last_groups_[g].action = GroupAction::Primary;
+      Job job;
+      job.group_index = g;
+      job.agents = &groups[g];
+      work.jobs.push_back(std::move(job));
+    } else {
+      last_groups_[g].action = GroupAction::Reused;
+    }
+  }
+}
+
+// The primary solves, in parallel, larger groups first so the slowest solve starts early. Each
+// reads only the plans as they stood before this step.
+void GdRhcrPlanner::solve_groups(const WorldView& world, StepWork& work) const {
+  auto& jobs = work.jobs;
+  std::vector<size_t> order(jobs.size());
+  for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(),
+            [&](size_t a, size_t b) { return jobs[a].agents->size() > jobs[b].agents->size(); });
+  GDRHCR_TSAN_RELEASE(&jobs);
+  arena_->arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 1),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                        GDRHCR_TSAN_ACQUIRE(&jobs);
+                        for (size_t k = r.begin(); k != r.end(); ++k) solve_primary(world, jobs[order[k]]);
+                        GDRHCR_TSAN_RELEASE(&jobs);
+                      },
+                      // One group per task: solves differ wildly in cost, so no chunking (and
+                      // no auto_partitioner, whose benign steal flag ThreadSanitizer reports).
+                      tbb::simple_partitioner());
+  });
+  GDRHCR_TSAN_ACQUIRE(&jobs);
+}
+
+// Solved plans become the groups' lambda_i (and obstacles for the guidance searches); failed
+// solves go to the secondary solver.
+void GdRhcrPlanner::adopt_plans(const WorldView& world, StepWork& work) {
+  for (Job& job : work.jobs) {
+    ++primary_calls_;
+    pbs_nodes_ += job.result.nodes;
+    primary_time_sum_ += job.result.time_s;
+    work.max_solve_time = std::max(work.max_solve_time, job.result.time_s);
+    last_groups_[job.group_index].solve_time_s = job.result.time_s;
+    if (job.result.timed_out) ++timeouts_;
+    if (job.budget_skipped) ++budget_skips_;
+    if (!job.result.success) {
+      ++failure_fallbacks_;
+      last_groups_[job.group_index].action = GroupAction::FailureFallback;
+      work.secondary_groups.push_back(job.group_index);
+      continue;
+    }
+    soft_conflicts_ += job.result.soft_conflicts;
+    auto plan = std::make_shared<Plan>();
+    plan->id = next_plan_id_++;
+    plan->start_time = world.timestep;
+    plan->valid_steps = cfg_.H;
+    plan->paths = std::move(job.result.paths);
+    for (size_t s = 0; s < job.agents->size(); ++s) {
+      const int i = (*job.agents)[s];
+      plan->goals.push_back(world.goals[i]);
+      plan->held.push_back(world.is_immovable(i));
+      plan_of_[i] = plan;
+      slot_of_[i] = static_cast<int>(s);
+      if (guidance_) guidance_->set_path(i, world.timestep, plan->paths[s]);
+    }
+  }
+}
+
+// Line 22: every agent on a (new or cached) multi-step plan takes its next planned cell; one
+// secondary-solver call moves the agents of every group sent there.
+void GdRhcrPlanner::move_agents(const WorldView& world, StepWork& work, std::vector<Cell>& next) {
+  const int n = world.num_agents(), t = world.timestep;
+  std::fill(next.begin(), next.end(), kNoCell);
+  work.on_secondary.assign(n, 0);
+  for (size_t g : work.secondary_groups)
+    for (int i : partition_.groups()[g]) work.on_secondary[i] = 1, work.secondary.push_back(i);
+  for (int i = 0; i < n; ++i) {
+    if (work.on_secondary[i]) continue;
+    const auto& path = plan_of_[i]->paths[slot_of_[i]];
+    next[i] = path[std::min<int>(t - plan_of_[i]->start_time + 1, path.size() - 1)];
+  }
+  if (!work.secondary.empty()) {
+    const auto t0 = Clock::now();
+    if (forecast_) forecast_->seed(world, work.secondary, *guidance_);
+    run_secondary(world, work.secondary, next, next);
+    const double dt = std::chrono::duration<double>(Clock::now() - t0).count();
+    work.max_solve_time = std::max(work.max_solve_time, dt);
+    for (size_t g : work.secondary_groups) last_groups_[g].solve_time_s += dt;
+  }
+  for (auto& info : last_groups_) threshold_fallbacks_ += info.action == GroupAction::ThresholdFallback;
+}
+
+// The final check; agents it re-moved and the secondary solver's agents get one-step plans, so
+// they are reconsidered (and maybe handed back to the primary solver) at the next step; then the
+// secondary agents' motion forecast for the next step's guidance.
+void GdRhcrPlanner::merge_and_repair(const WorldView& world, StepWork& work, std::vector<Cell>& next) {
+  std::vector<uint8_t> repaired(world.num_agents(), 0);
+  if (repair_step(world, next, repaired)) {
+    for (int i = 0; i < world.num_agents(); ++i)
+      if (repaired[i] && !work.on_secondary[i]) work.on_secondary[i] = 1, work.secondary.push_back(i);
+    for (auto& info : last_groups_)
+      if (repaired[info.agents[0]]) info.action = GroupAction::Repair;
+  }
+  adopt_one_step_plans(world, work.secondary, next);
+  if (forecast_ && !work.secondary.empty()) roll_forecast(world, work.secondary, work.on_secondary, next);
+}
+
+void GdRhcrPlanner::record_step(const StepWork& work) {
+  const auto& groups = partition_.groups();
+  ++steps_;
+  group_count_sum_ += static_cast<long>(groups.size());
+  size_t max_size = 0, agents = 0;
+  for (auto& g : groups) max_size = std::max(max_size, g.size()), agents += g.size();
+  agents_sum_ += static_cast<long>(agents);
+  max_group_sum_ += static_cast<long>(max_size);
+  replanned_groups_ += static_cast<long>(work.jobs.size());
+  for (auto& info : last_groups_) reused_groups_ += info.action == GroupAction::Reused;
+  plan_time_sum_all_steps_ += work.max_solve_time;
+  if (!work.jobs.empty() || !work.secondary.empty()) ++solved_steps_;
 }
 
 std::vector<PlannerGroup> GdRhcrPlanner::groups() const {
@@ -191,105 +345,67 @@ void GdRhcrPlanner::index_agents(const WorldView& world) {
   }
 }
 
-// Prefix sums over the grid of free cells and of agents, for O(1) density queries per group.
-void GdRhcrPlanner::count_density(const WorldView& world) {
-  const int w = grid_.width(), h = grid_.height();
-  std::vector<uint8_t> has_agent(grid_.num_cells(), 0);
-  for (Cell c : world.positions) has_agent[c] = 1;
-  free_sum_.assign(static_cast<size_t>(w + 1) * (h + 1), 0);
-  agent_sum_.assign(free_sum_.size(), 0);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const size_t k = static_cast<size_t>(y + 1) * (w + 1) + (x + 1);
-      const Cell c = grid_.cell(x, y);
-      free_sum_[k] = grid_.is_free(c) + free_sum_[k - 1] + free_sum_[k - (w + 1)] - free_sum_[k - (w + 1) - 1];
-      agent_sum_[k] = has_agent[c] + agent_sum_[k - 1] + agent_sum_[k - (w + 1)] - agent_sum_[k - (w + 1) - 1];
-    }
+// What agent j (outside the group being solved) is expected to do, as a soft constraint: its
+// plan from the end of the previous step, up to H steps; for an agent the secondary solver moves,
+// its guidance path; else staying where it is.
+std::vector<Cell> GdRhcrPlanner::soft_path_of(const WorldView& world, int j) const {
+  const int t = world.timestep;
+  std::vector<Cell> rest;
+  const Plan* p = plan_of_[j].get();
+  const int k = p ? t - p->start_time : -1;
+  if (p && k >= 0 && k < static_cast<int>(p->paths[slot_of_[j]].size()) &&
+      p->paths[slot_of_[j]][k] == world.positions[j]) {
+    const auto& path = p->paths[slot_of_[j]];
+    const int end = std::min<int>(path.size(), k + cfg_.H + 1);
+    rest.assign(path.begin() + k, path.begin() + end);
+  }
+  if (rest.size() <= 1 && guidance_ && guidance_->next_cell(j, t, world.positions[j]) != kNoCell) {
+    rest = guidance_->path_from(j, t);
+    if (static_cast<int>(rest.size()) > cfg_.H + 1) rest.resize(cfg_.H + 1);
+  }
+  if (rest.empty()) rest.push_back(world.positions[j]);
+  return rest;
 }
 
-// Agents per free cell around the group: its bounding box grown by density_margin.
-double GdRhcrPlanner::local_density(const WorldView& world, const std::vector<int>& group) const {
-  const auto b = bounding_box(grid_, world, group);
-  const int m = cfg_.density_margin, w = grid_.width();
-  const int x0 = std::max(0, b[0] - m), y0 = std::max(0, b[1] - m);
-  const int x1 = std::min(grid_.width() - 1, b[2] + m), y1 = std::min(grid_.height() - 1, b[3] + m);
-  auto box = [&](const std::vector<int>& sum) {
-    auto at = [&](int x, int y) { return sum[static_cast<size_t>(y) * (w + 1) + x]; };
-    return at(x1 + 1, y1 + 1) - at(x0, y1 + 1) - at(x1 + 1, y0) + at(x0, y0);
-  };
-  const int free = box(free_sum_);
-  return free > 0 ? double(box(agent_sum_)) / free : 1.0;
+// Line 11: the soft constraints of the agents outside the group that could meet it within H
+// steps: Manhattan distance (a lower bound on the path distance) at most 2H from the group's
+// bounding box, found through the blocks of the spatial index that overlap that box.
+void GdRhcrPlanner::collect_soft_constraints(const WorldView& world, const std::vector<int>& agents,
+                                             SoftConstraintTable& soft) const {
+  const auto [x0, y0, x1, y1] = bounding_box(grid_, world, agents);
+  const int margin = 2 * cfg_.H;
+  const int my_group = partition_.group_of(agents[0]);
+  const int bx0 = std::max(0, x0 - margin) / kBlock, bx1 = std::min(grid_.width() - 1, x1 + margin) / kBlock;
+  const int by0 = std::max(0, y0 - margin) / kBlock, by1 = std::min(grid_.height() - 1, y1 + margin) / kBlock;
+  for (int by = by0; by <= by1; ++by)
+    for (int bx = bx0; bx <= bx1; ++bx)
+      for (int j : block_agents_[static_cast<size_t>(by) * blocks_w_ + bx]) {
+        if (partition_.group_of(j) == my_group) continue;
+        const int x = grid_.x_of(world.positions[j]), y = grid_.y_of(world.positions[j]);
+        if (x < x0 - margin || x > x1 + margin || y < y0 - margin || y > y1 + margin) continue;
+        soft.add_path(soft_path_of(world, j));
+      }
 }
 
+// Line 12: PBS over SIPP for one group, window H, against the soft constraints. Immovable agents
+// (offline robots) are not planned: every path avoids their cells (hard: they will not move).
 void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
   const std::vector<int>& agents = *job.agents;
-  const int t = world.timestep;
-  // Soft constraints: the plans of agents outside the group as they stood at the end of the
-  // previous step (plan_of_ is not written during the parallel phase). Only agents that could
-  // meet the group within H steps matter: Manhattan distance (a lower bound on the path
-  // distance) at most 2H from the group's bounding box.
   const auto t_start = Clock::now();
-  // One table per thread, reused: clearing it costs what was added, not the map's size.
-  thread_local std::unique_ptr<SoftConstraintTable> table;
-  thread_local const Grid* table_grid = nullptr;
-  thread_local int table_cells = 0;
-  if (!table || table_grid != &grid_ || table_cells != grid_.num_cells()) {
-    table = std::make_unique<SoftConstraintTable>(grid_);
-    table_grid = &grid_;
-    table_cells = grid_.num_cells();
-  }
-  SoftConstraintTable& soft = *table;
-  soft.clear();
-  if (cfg_.c_soft > 0) {
-    const auto [x0, y0, x1, y1] = bounding_box(grid_, world, agents);
-    const int margin = 2 * cfg_.H;
-    const int my_group = partition_.group_of(agents[0]);
-    std::vector<Cell> rest;
-    // Only the blocks of the spatial index that overlap the grown box are visited.
-    const int bx0 = std::max(0, x0 - margin) / kBlock, bx1 = std::min(grid_.width() - 1, x1 + margin) / kBlock;
-    const int by0 = std::max(0, y0 - margin) / kBlock, by1 = std::min(grid_.height() - 1, y1 + margin) / kBlock;
-    for (int by = by0; by <= by1; ++by)
-      for (int bx = bx0; bx <= bx1; ++bx)
-        for (int j : block_agents_[static_cast<size_t>(by) * blocks_w_ + bx]) {
-          if (partition_.group_of(j) == my_group) continue;
-          const int x = grid_.x_of(world.positions[j]), y = grid_.y_of(world.positions[j]);
-          if (x < x0 - margin || x > x1 + margin || y < y0 - margin || y > y1 + margin) continue;
-          rest.clear();
-          const Plan* p = plan_of_[j].get();
-          const int k = p ? t - p->start_time : -1;
-          if (p && k >= 0 && k < static_cast<int>(p->paths[slot_of_[j]].size()) &&
-              p->paths[slot_of_[j]][k] == world.positions[j]) {
-            const auto& path = p->paths[slot_of_[j]];
-            const int end = std::min<int>(path.size(), k + cfg_.H + 1);
-            rest.assign(path.begin() + k, path.begin() + end);
-          }
-          if (rest.size() <= 1 && guidance_ && guidance_->next_cell(j, t, world.positions[j]) != kNoCell) {
-            rest = guidance_->path_from(j, t);  // moved by the secondary solver: its guidance
-            if (static_cast<int>(rest.size()) > cfg_.H + 1) rest.resize(cfg_.H + 1);
-          }
-          if (rest.empty()) rest.push_back(world.positions[j]);  // no usable plan: expected to stay
-          soft.add_path(rest);
-        }
-  }
-  // Immovable agents (offline robots) are not planned: every path avoids their cells, theirs
-  // and those of the other groups (hard, as they will not move whatever anyone plans).
+  SoftConstraintTable& soft = thread_soft_table(grid_);
+  if (cfg_.c_soft > 0) collect_soft_constraints(world, agents, soft);
   std::vector<Cell> starts;
   std::vector<std::vector<Cell>> goals;
-  std::vector<int> planned;
-  for (int i : agents) {
-    if (world.is_immovable(i)) continue;
-    planned.push_back(i);
-    starts.push_back(world.positions[i]);
-    goals.push_back(world.goals[i]);
-  }
+  for (int i : agents)
+    if (!world.is_immovable(i)) starts.push_back(world.positions[i]), goals.push_back(world.goals[i]);
   PbsConfig pc;
   pc.horizon = cfg_.H;
   pc.c_soft = cfg_.c_soft;
   pc.time_limit_s = cfg_.timeout_s;
   pc.node_budget = cfg_.node_budget;
   pc.blocked_cells = taken_cells_.empty() ? nullptr : &taken_cells_;
-  if (job.deadline != Clock::time_point::max()) {  // the step budget: give up if nothing is left
-    const double left = std::chrono::duration<double>(job.deadline - Clock::now()).count();
+  if (budget_.solves != Clock::time_point::max()) {  // the step budget: give up if nothing is left
+    const double left = std::chrono::duration<double>(budget_.solves - Clock::now()).count();
     if (left <= 0) {
       job.result = PbsResult{};
       job.result.timed_out = true;
@@ -300,9 +416,8 @@ void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
     pc.time_limit_s = std::min(pc.time_limit_s, left);
   }
   job.result = solve_pbs(grid_, world.dist, starts, goals, soft.empty() ? nullptr : &soft, pc);
-  // The plan-time metric covers building the soft constraints too.
-  job.result.time_s = std::chrono::duration<double>(Clock::now() - t_start).count();
-  if (job.result.success && planned.size() != agents.size()) {  // back in group order
+  job.result.time_s = std::chrono::duration<double>(Clock::now() - t_start).count();  // soft constraints included
+  if (job.result.success && starts.size() != agents.size()) {  // back in group order
     std::vector<std::vector<Cell>> paths(agents.size());
     for (size_t a = 0, k = 0; a < agents.size(); ++a)
       paths[a] = world.is_immovable(agents[a]) ? std::vector<Cell>(cfg_.H + 1, world.positions[agents[a]])
@@ -351,7 +466,7 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
     std::vector<int> order(agents);
     std::stable_sort(order.begin(), order.end(),
                      [&](int a, int b) { return pibt_.priority(a) > pibt_.priority(b); });
-    arena_->arena.execute([&] { guidance_->update(world, order, step_deadline_); });  // banded: threads
+    arena_->arena.execute([&] { guidance_->update(world, order, budget_.guidance); });  // banded: threads
     std::vector<Cell> preferred(world.num_agents(), kNoCell);
     for (int i : agents) preferred[i] = guidance_->next_cell(i, world.timestep, world.positions[i]);
     pibt_.step(world, moves, agents, fixed, &preferred);
@@ -378,15 +493,43 @@ void GdRhcrPlanner::roll_forecast(const WorldView& world, const std::vector<int>
     const int k = t + 1 - plan_of_[i]->start_time;
     if (k >= 0 && k < static_cast<int>(path.size()) && path[k] == next[i]) fixed[i].assign(path.begin() + k, path.end());
   }
-  forecast_->roll(world, next, secondary, pibt_, *guidance_, &fixed, step_deadline_);  // within the step budget
+  forecast_->roll(world, next, secondary, pibt_, *guidance_, &fixed, budget_.guidance);
+}
+
+// The agents the final check re-moves together: the groups of the colliding pair and of every
+// agent repaired before, closed under "a fixed agent moving into the cell of a re-moved agent
+// joins them" (PIBT must be free to keep an agent in place).
+std::vector<int> GdRhcrPlanner::repair_set(const WorldView& world, const std::vector<Cell>& next,
+                                           const std::vector<uint8_t>& repaired, int agent_a, int agent_b) const {
+  std::vector<uint8_t> in_set(world.num_agents(), 0);
+  std::vector<int> agents;
+  auto add_group = [&](int a) {
+    if (a < 0 || in_set[a]) return;
+    for (int m : partition_.groups()[partition_.group_of(a)])
+      if (!in_set[m]) in_set[m] = 1, agents.push_back(m);
+  };
+  for (int i = 0; i < world.num_agents(); ++i)
+    if (repaired[i]) add_group(i);
+  add_group(agent_a);
+  add_group(agent_b);
+  std::vector<int> agent_at(grid_.num_cells(), -1);
+  for (int i = 0; i < world.num_agents(); ++i) agent_at[world.positions[i]] = i;
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (int j = 0; j < world.num_agents(); ++j) {
+      if (in_set[j]) continue;
+      const int k = agent_at[next[j]];
+      if (k >= 0 && k != j && in_set[k]) add_group(j), grew = true;
+    }
+  }
+  return agents;
 }
 
 // The final check: if the assembled step has a collision (possible only for V < 2 or with
-// stale plans), the groups involved are re-moved together by PIBT with every other move fixed;
-// groups whose fixed move enters a re-moved agent's cell join them (PIBT must be free to keep
-// an agent in place). Returns true when anything was repaired. Every round re-moves more agents
-// than the last; a collision that stays with no new agent to re-move cannot be repaired (the
-// input is impossible, e.g. two agents in one cell) and throws instead of looping for ever.
+// stale plans), the agents of repair_set are re-moved together by PIBT with every other move
+// fixed. Returns true when anything was repaired. Every round re-moves more agents than the
+// last; a collision that stays with no new agent to re-move cannot be repaired (the input is
+// impossible, e.g. two agents in one cell) and throws instead of looping for ever.
 bool GdRhcrPlanner::repair_step(const WorldView& world, std::vector<Cell>& next,
                                 std::vector<uint8_t>& repaired) {
   bool any = false;
@@ -395,28 +538,7 @@ bool GdRhcrPlanner::repair_step(const WorldView& world, std::vector<Cell>& next,
     auto v = validator_.check(world.positions, next);
     if (!v) return any;
     any = true;
-    std::vector<uint8_t> in_set(world.num_agents(), 0);
-    std::vector<int> agents;
-    auto add_group = [&](int a) {
-      if (a < 0 || in_set[a]) return;
-      for (int m : partition_.groups()[partition_.group_of(a)])
-        if (!in_set[m]) in_set[m] = 1, agents.push_back(m);
-    };
-    for (int i = 0; i < world.num_agents(); ++i)
-      if (repaired[i]) add_group(i);
-    add_group(v->agent_a);
-    add_group(v->agent_b);
-    // Closure: a fixed agent moving into a cell where a re-moved agent stands joins the set.
-    std::vector<int> agent_at(grid_.num_cells(), -1);
-    for (int i = 0; i < world.num_agents(); ++i) agent_at[world.positions[i]] = i;
-    for (bool grew = true; grew;) {
-      grew = false;
-      for (int j = 0; j < world.num_agents(); ++j) {
-        if (in_set[j]) continue;
-        const int k = agent_at[next[j]];
-        if (k >= 0 && k != j && in_set[k]) add_group(j), grew = true;
-      }
-    }
+    const std::vector<int> agents = repair_set(world, next, repaired, v->agent_a, v->agent_b);
     if (last_round > 0 && agents.size() <= last_round)
       throw std::runtime_error("gd-rhcr: no collision-free step: " + v->describe(grid_, world.timestep) +
                                " persists with every agent involved re-moved (do two agents start in one cell?)");
@@ -429,180 +551,22 @@ bool GdRhcrPlanner::repair_step(const WorldView& world, std::vector<Cell>& next,
   }
 }
 
-StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& next) {
-  const int n = world.num_agents();
-  const int t = world.timestep;
-  now_ = t;
-  const auto step_start = Clock::now();
-  partition_.compute(world.positions, cfg_.V);
-  if (cfg_.max_density < 1.0) count_density(world);
-  index_agents(world);
-  // Guidance searches stop at 90% of the step budget (the agents left fall back to distances).
-  step_deadline_ = cfg_.step_budget_s > 0
-                       ? step_start + std::chrono::duration_cast<Clock::duration>(
-                                          std::chrono::duration<double>(0.9 * cfg_.step_budget_s))
-                       : Clock::time_point::max();
-  taken_cells_ = world.taken_cells();
-  taken_at_ = world.taken_cell_mask();
-  const auto& groups = partition_.groups();
-
-  last_groups_.assign(groups.size(), GroupInfo{});
-  std::vector<Job> jobs;
-  std::vector<int> secondary;  // agents moved by PIBT this step
-  std::vector<size_t> threshold_groups;
-  for (size_t g = 0; g < groups.size(); ++g) {
-    last_groups_[g].agents = groups[g];
-    const bool crowded = cfg_.max_density < 1.0 && local_density(world, groups[g]) > cfg_.max_density;
-    if (crowded) ++density_fallbacks_;
-    const bool sent = static_cast<int>(groups[g].size()) >= k_threshold_ || cfg_.solver == "pibt" || crowded;
-    if (sent)
-      for (int i : groups[g]) last_sent_[i] = t;
-    bool stays = false;  // hysteresis: sent to the secondary solver a moment ago
-    if (!sent && cfg_.secondary_stay > 0)
-      for (int i : groups[g]) stays = stays || t - last_sent_[i] <= cfg_.secondary_stay;
-    if (sent || stays) {
-      last_groups_[g].action = GroupAction::ThresholdFallback;
-      threshold_groups.push_back(g);
-    } else if (needs_replan(world, groups[g])) {
-      last_groups_[g].action = GroupAction::Primary;
-      Job job;
-      job.group_index = g;
-      job.agents = &groups[g];
-      // With a step budget the primary solves get its first 60%; the rest is kept for the
-      // secondary solver, which moves whatever they leave.
-      if (cfg_.step_budget_s > 0)
-        job.deadline = step_start + std::chrono::duration_cast<Clock::duration>(
-                                        std::chrono::duration<double>(0.6 * cfg_.step_budget_s));
-      jobs.push_back(std::move(job));
-    } else {
-      last_groups_[g].action = GroupAction::Reused;
-    }
-  }
-
-  // Primary solves, in parallel; each reads only the plans as they stood before this step.
-  // Larger groups first so the slowest solve starts early.
-  std::vector<size_t> order(jobs.size());
-  for (size_t k = 0; k < order.size(); ++k) order[k] = k;
-  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    return jobs[a].agents->size() > jobs[b].agents->size();
-  });
-  GDRHCR_TSAN_RELEASE(&jobs);
-  arena_->arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 1),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                        GDRHCR_TSAN_ACQUIRE(&jobs);
-                        for (size_t k = r.begin(); k != r.end(); ++k) solve_primary(world, jobs[order[k]]);
-                        GDRHCR_TSAN_RELEASE(&jobs);
-                      },
-                      // One group per task: solves differ wildly in cost, so no chunking (and
-                      // no auto_partitioner, whose benign steal flag ThreadSanitizer reports).
-                      tbb::simple_partitioner());
-  });
-  GDRHCR_TSAN_ACQUIRE(&jobs);
-
-  // Adopt the solved plans; failed solves fall back to the secondary solver.
-  double step_max_time = 0;
-  for (Job& job : jobs) {
-    ++primary_calls_;
-    pbs_nodes_ += job.result.nodes;
-    primary_time_sum_ += job.result.time_s;
-    step_max_time = std::max(step_max_time, job.result.time_s);
-    last_groups_[job.group_index].solve_time_s = job.result.time_s;
-    if (job.result.timed_out) ++timeouts_;
-    if (job.budget_skipped) ++budget_skips_;
-    if (!job.result.success) {
-      ++failure_fallbacks_;
-      last_groups_[job.group_index].action = GroupAction::FailureFallback;
-      threshold_groups.push_back(job.group_index);
-      continue;
-    }
-    soft_conflicts_ += job.result.soft_conflicts;
-    auto plan = std::make_shared<Plan>();
-    plan->id = next_plan_id_++;
-    plan->start_time = t;
-    plan->valid_steps = cfg_.H;
-    plan->paths = std::move(job.result.paths);
-    for (size_t s = 0; s < job.agents->size(); ++s) {
-      const int i = (*job.agents)[s];
-      plan->goals.push_back(world.goals[i]);
-      plan->held.push_back(world.is_immovable(i));
-      plan_of_[i] = plan;
-      slot_of_[i] = static_cast<int>(s);
-      if (guidance_) guidance_->set_path(i, t, plan->paths[s]);  // guidance searches avoid it
-    }
-  }
-
-  // Every agent on a (new or cached) multi-step plan takes its next planned cell.
-  std::fill(next.begin(), next.end(), kNoCell);
-  std::vector<uint8_t> on_secondary(n, 0);
-  for (size_t g : threshold_groups)
-    for (int i : groups[g]) on_secondary[i] = 1, secondary.push_back(i);
-  for (int i = 0; i < n; ++i) {
-    if (on_secondary[i]) continue;
-    const auto& path = plan_of_[i]->paths[slot_of_[i]];
-    const int k = t - plan_of_[i]->start_time;
-    next[i] = path[std::min<int>(k + 1, path.size() - 1)];
-  }
-  if (!secondary.empty()) {
-    const auto t0 = Clock::now();
-    if (forecast_) forecast_->seed(world, secondary, *guidance_);
-    run_secondary(world, secondary, next, next);
-    const double dt = std::chrono::duration<double>(Clock::now() - t0).count();
-    step_max_time = std::max(step_max_time, dt);  // one PIBT call covers all those groups
-    for (size_t g : threshold_groups) last_groups_[g].solve_time_s += dt;
-  }
-  for (size_t g = 0; g < groups.size(); ++g) {
-    if (last_groups_[g].action == GroupAction::ThresholdFallback) ++threshold_fallbacks_;
-  }
-
-  // Final check; repaired agents get one-step plans like the secondary solver's.
-  std::vector<uint8_t> repaired(n, 0);
-  if (repair_step(world, next, repaired)) {
-    for (int i = 0; i < n; ++i)
-      if (repaired[i] && !on_secondary[i]) on_secondary[i] = 1, secondary.push_back(i);
-    for (auto& info : last_groups_)
-      if (repaired[info.agents[0]]) info.action = GroupAction::Repair;
-  }
-  for (int i : secondary) last_secondary_[i] = t;
-  for (size_t k = 0; k < jobs.size(); ++k)  // border flicker: a secondary agent handed to PBS
-    if (last_groups_[jobs[k].group_index].action == GroupAction::Primary)
-      for (int i : *jobs[k].agents) solver_switches_ += last_secondary_[i] == t - 1;
-  adopt_one_step_plans(world, secondary, next);
-  if (forecast_ && !secondary.empty()) roll_forecast(world, secondary, on_secondary, next);
-
-  // Statistics.
-  const bool solved = !jobs.empty() || !secondary.empty();
-  ++steps_;
-  group_count_sum_ += static_cast<long>(groups.size());
-  agents_sum_ += n;
-  size_t max_size = 0;
-  for (auto& g : groups) max_size = std::max(max_size, g.size());
-  max_group_sum_ += static_cast<long>(max_size);
-  replanned_groups_ += static_cast<long>(jobs.size());
-  for (auto& info : last_groups_) reused_groups_ += info.action == GroupAction::Reused;
-  plan_time_sum_all_steps_ += step_max_time;
-  if (solved) ++solved_steps_;
-  return {solved, step_max_time};
-}
-
 nlohmann::json GdRhcrPlanner::params() const {
   return {{"V", cfg_.V},
           {"H", cfg_.H},
           {"c_soft", cfg_.c_soft},
           {"k_threshold", k_threshold_},
-          {"k_threshold_rule", cfg_.k_threshold > 0 ? "given" : "max(2, min(floor(0.1 k), 20))"},
-          {"timeout_s", cfg_.timeout_s},
+          {"timeout", cfg_.timeout_s},
+          {"step_budget", cfg_.step_budget_s},
           {"node_budget", cfg_.node_budget},
           {"threads", cfg_.threads},
           {"solver", cfg_.solver},
-          {"solver2", cfg_.solver2},
-          {"pibt_swap", cfg_.pibt.swap},
-          {"pibt_priority_reset", cfg_.pibt.priority_reset},
-          {"guidance", cfg_.guidance ? "local" : "none"},
           {"max_density", cfg_.max_density},
-          {"step_budget_s", cfg_.step_budget_s},
           {"density_margin", cfg_.density_margin},
-          {"secondary_stay", cfg_.secondary_stay},
+          {"swap", cfg_.pibt.swap},
+          {"priority_reset", cfg_.pibt.priority_reset},
+          {"tie_break", cfg_.pibt.tie_break == PibtOptions::TieBreak::kRandom ? "random" : "free-first"},
+          {"guidance", cfg_.guidance ? "local" : "none"},
           {"lg_window", cfg_.lg.window},
           {"lg_cost", cfg_.lg.collision_cost},
           {"lg_cost_per_kind", cfg_.lg.cost_per_kind},
@@ -610,6 +574,10 @@ nlohmann::json GdRhcrPlanner::params() const {
           {"lg_near_steps", cfg_.lg.near_steps},
           {"lg_contraflow", cfg_.lg.contraflow_cost},
           {"lg_lazy", cfg_.lg.lazy},
+          {"lg_recheck", cfg_.lg.recheck},
+          {"lg_keep", cfg_.lg.keep},
+          {"lg_expansions", cfg_.lg.max_expansions},
+          {"lg_blocked_steps", cfg_.lg.blocked_steps},
           {"lg_phases", cfg_.lg.phases},
           {"lg_forecast", forecast_ ? cfg_.forecast.steps : 0},
           {"lg_forecast_window", cfg_.forecast.window},
@@ -631,7 +599,6 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"soft_conflicts_in_plans", soft_conflicts_},
           {"threshold_fallbacks", threshold_fallbacks_},
           {"density_fallbacks", density_fallbacks_},
-          {"solver_switches", solver_switches_},
           {"budget_skips", budget_skips_},
           {"guidance_cut_short", guidance_ ? guidance_->cut_short() : 0},
           {"guidance_searches", guidance_ ? guidance_->searches() : 0},

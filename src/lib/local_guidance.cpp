@@ -30,7 +30,6 @@ LocalGuidance::LocalGuidance(const Grid& grid, int num_agents, LocalGuidanceConf
       slots_(config.window + 1),
       path_(num_agents),
       start_(num_agents, 0),
-      planned_at_(num_agents, 0),
       goal_(num_agents, kNoCell),
       occ_(static_cast<size_t>(slots_) * grid.num_cells(), Occupancy{0, {0, 0, 0, 0}}),
       flow_(grid.num_cells(), std::array<uint16_t, 4>{0, 0, 0, 0}),
@@ -102,7 +101,7 @@ void LocalGuidance::set_path(int i, int now, const std::vector<Cell>& path, Cell
   enroll(i, -1);
   const size_t len = std::min<size_t>(path.size(), slots_);
   path_[i].assign(path.begin(), path.begin() + len);
-  start_[i] = planned_at_[i] = now;
+  start_[i] = now;
   goal_[i] = goal;  // kNoCell: not a guidance path, replanned whenever guidance is asked for
   enroll(i, +1);
 }
@@ -141,83 +140,8 @@ bool LocalGuidance::is_valid(const WorldView& world, int i) const {
   return true;
 }
 
-// Replanning every step (lazy = false) would return an equally cheap path for an agent whose
-// kept path meets nobody and approaches the goal by one every step: no path can do better. Such
-// a path is kept and, if it stops short of the goal, extended by conflict-free steps towards the
-// goal up to the window; otherwise (or if no such step exists) the agent is replanned.
-bool LocalGuidance::still_optimal(const WorldView& world, int i, std::minstd_rand& rng) {
-  auto& p = path_[i];
-  if (p.size() < 2 || start_[i] != world.timestep || p[0] != world.positions[i]) return false;
-  const Cell goal = world.goals[i].empty() ? world.positions[i] : world.goals[i][0];
-  if (goal_[i] != goal) return false;
-  const auto row_ptr = world.dist.row(goal);
-  const DistRow& row = *row_ptr;
-  const int h0 = row[p[0]];
-  for (size_t k = 1; k < p.size(); ++k) {
-    if (row[p[k]] != h0 - static_cast<int>(k)) return false;
-    if (at(p[k], slot(start_[i] + k)) > 1) return false;
-    if (leaving(p[k], slot(start_[i] + k - 1), dir(p[k], p[k - 1])) > 0) return false;
-  }
-  while (p.back() != goal && static_cast<int>(p.size()) < cfg_.window + 1) {
-    const Cell last = p.back();
-    const int t_last = start_[i] + static_cast<int>(p.size()) - 1;
-    Cell options[4];
-    int m = 0;
-    for (Cell u : grid_.neighbours(last))
-      if (row[u] == row[last] - 1 && at(u, slot(t_last + 1)) == 0 &&
-          leaving(u, slot(t_last), dir(u, last)) == 0)
-        options[m++] = u;
-    if (m == 0) return false;
-    const Cell u = options[m == 1 ? 0 : rng() % m];
-    p.push_back(u);
-    at(u, slot(t_last + 1)) += 1;
-    leaving(last, slot(t_last), dir(last, u)) += 1;
-    flow_[last][dir(last, u)] += 1;
-  }
-  return true;
-}
-
-// A shortest path from the agent's cell that meets nobody, walked greedily (a step closer to
-// the goal every step, random among equal steps), replaces the agent's path: no search finds a
-// cheaper one. Returns false, and leaves the path as it was, when the walk is blocked.
-bool LocalGuidance::probe_free_path(const WorldView& world, int i, std::minstd_rand& rng, Search& search) {
-  const Cell from = world.positions[i];
-  const Cell goal = world.goals[i].empty() ? from : world.goals[i][0];
-  if (from == goal) return false;
-  const auto row_ptr = world.dist.row(goal);
-  const DistRow& row = *row_ptr;
-  enroll(i, -1);
-  auto& q = search.walk;
-  q.assign(1, from);
-  while (q.back() != goal && static_cast<int>(q.size()) < cfg_.window + 1) {
-    const Cell last = q.back();
-    const int t_last = world.timestep + static_cast<int>(q.size()) - 1;
-    Cell options[4];
-    int m = 0;
-    for (Cell u : grid_.neighbours(last))
-      if (row[u] == row[last] - 1 && at(u, slot(t_last + 1)) == 0 && leaving(u, slot(t_last), dir(u, last)) == 0)
-        options[m++] = u;
-    if (m == 0) {
-      enroll(i, +1);
-      return false;
-    }
-    q.push_back(options[m == 1 ? 0 : rng() % m]);
-  }
-  path_[i].swap(q);
-  start_[i] = planned_at_[i] = world.timestep;
-  goal_[i] = goal;
-  enroll(i, +1);
-  return true;
-}
-
-// Whether agent i keeps its path this step, or gets a free shortest one without a search (see
-// lazy, keep_optimal and refresh).
-bool LocalGuidance::keeps(const WorldView& world, int i, std::minstd_rand& rng, Search& search) {
-  if (!cfg_.lazy) return cfg_.keep_optimal && still_optimal(world, i, rng);
-  if (!cfg_.keep_optimal) return is_valid(world, i);
-  if (still_optimal(world, i, rng) || probe_free_path(world, i, rng, search)) return true;
-  return is_valid(world, i) && (cfg_.refresh <= 0 || world.timestep - planned_at_[i] < cfg_.refresh);
-}
+// Whether agent i keeps its path this step (lazy: until it is left or meets another path).
+bool LocalGuidance::keeps(const WorldView& world, int i) const { return cfg_.lazy && is_valid(world, i); }
 
 void LocalGuidance::update(const WorldView& world, const std::vector<int>& agents,
                            std::chrono::steady_clock::time_point deadline) {
@@ -237,7 +161,7 @@ void LocalGuidance::update(const WorldView& world, const std::vector<int>& agent
       }
       clear(i);
       path_[i].assign(blocked_steps() + 1, world.positions[i]);
-      start_[i] = planned_at_[i] = now;
+      start_[i] = now;
       enroll(i, +1);
     }
     todo = &movable;
@@ -270,7 +194,7 @@ void LocalGuidance::update_in_order(const WorldView& world, const std::vector<in
   const bool timed = deadline != std::chrono::steady_clock::time_point::max();
   for (size_t k = 0; k < agents.size(); ++k) {
     const int i = agents[k];
-    if (keeps(world, i, rng, search)) {
+    if (keeps(world, i)) {
       ++counts.kept;
       continue;
     }
@@ -390,7 +314,6 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
   const Cell goal = world.goals[i].empty() ? at : world.goals[i][0];
   goal_[i] = goal;
   start_[i] = world.timestep;
-  planned_at_[i] = world.timestep;
   auto& out = path_[i];
   const int W = cfg_.window;
   if (at == goal) {  // rest on the goal

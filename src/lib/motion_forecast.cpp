@@ -17,10 +17,8 @@ constexpr int kRecheck = 3;
 LocalGuidanceConfig rollout_guidance(const MotionForecastConfig& f, LocalGuidanceConfig c) {
   c.window = f.window;
   c.lazy = true;
-  c.keep_optimal = false;
   c.recheck = kRecheck;
   c.keep = 0;
-  c.refresh = 0;
   c.phases = 0;
   return c;
 }

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <numeric>
 
-#include "gdrhcr/motion_forecast.hpp"
 #include "gdrhcr/task_stream.hpp"
 
 namespace gdrhcr {
@@ -105,34 +104,22 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
 
 // Candidates: the neighbours and staying put, the preferred cell first, then nearest to the
 // goal; among equals (tie_break kFreeFirst) a cell nobody stands on, then a random order.
-void PibtStep::order_candidates(const WorldView& world, int ai, Cell* cand, int m) {
+void PibtStep::order_candidates(int ai, Cell* cand, int m) {
   const DistRow& row = *rows_[ai];
   const Cell pref = preferred_ ? (*preferred_)[ai] : kNoCell;
   std::shuffle(cand, cand + m, rng_);
   const bool free_first = opt_.tie_break != PibtOptions::TieBreak::kRandom;
-  const bool hinder = opt_.tie_break == PibtOptions::TieBreak::kHindrance;
   // A stable insertion sort on keys read once (std::stable_sort allocates a buffer per call).
   int key[5];
   for (int k = 0; k < m; ++k) {
     const Cell c = cand[k];
-    key[k] = (c == pref ? 0 : 1 << 30) + std::min(row[c], (1 << 24) - 1) * 16 +
-             (hinder ? hindrance(world, ai, c) * 2 : 0) + (free_first && occupied_now_[c] != kFree ? 1 : 0);
+    key[k] = (c == pref ? 0 : 1 << 30) + std::min(row[c], (1 << 24) - 1) * 2 +
+             (free_first && occupied_now_[c] != kFree ? 1 : 0);
   }
   for (int k = 1; k < m; ++k)
     for (int j = k; j > 0 && key[j] < key[j - 1]; --j) std::swap(key[j], key[j - 1]), std::swap(cand[j], cand[j - 1]);
 }
 
-// How many agents next to ai's cell (of this call) would step onto c on their way to their goals.
-int PibtStep::hindrance(const WorldView& world, int ai, Cell c) const {
-  int h = 0;
-  for (Cell u : grid_.neighbours(world.positions[ai])) {
-    const int aj = occupied_now_[u];
-    if (aj < 0 || aj == ai || u == c) continue;
-    const DistRow& row = *rows_[aj];
-    if (row[c] < row[u]) ++h;
-  }
-  return h;
-}
 
 bool PibtStep::push(const WorldView& world, int ai, int aj, std::vector<Cell>& next) {
   const Cell here = world.positions[ai];
@@ -140,7 +127,7 @@ bool PibtStep::push(const WorldView& world, int ai, int aj, std::vector<Cell>& n
   int m = 0;
   for (Cell c : grid_.neighbours(here)) cand[m++] = c;
   cand[m++] = here;
-  order_candidates(world, ai, cand, m);
+  order_candidates(ai, cand, m);
   // Swap: the agent on the best cell must get past this one; walk away and pull it along.
   int partner = -1;
   if (opt_.swap) {
@@ -239,71 +226,6 @@ int PibtStep::swap_partner(const WorldView& world, int ai, Cell best) const {
     if (needs_swap(here, best, *rows_[ak], *rows_[ai]) && can_swap(best, here)) return ak;
   }
   return -1;
-}
-
-PibtPlanner::PibtPlanner(const Grid& grid, int num_agents, uint64_t seed, PibtOptions options,
-                         const LocalGuidanceConfig* guidance, const MotionForecastConfig* forecast)
-    : seed_(seed), pibt_(grid, num_agents, seed, options) {
-  if (guidance) guidance_ = std::make_unique<LocalGuidance>(grid, num_agents, *guidance);
-  if (guidance && forecast && forecast->steps >= 2)
-    forecast_ = std::make_unique<MotionForecast>(grid, num_agents, *forecast, *guidance);
-}
-
-PibtPlanner::~PibtPlanner() = default;
-
-nlohmann::json PibtPlanner::params() const {
-  const auto& o = pibt_.options();
-  nlohmann::json p = {{"seed", seed_},
-                      {"priority_reset", o.priority_reset},
-                      {"swap", o.swap},
-                      {"tie_break", o.tie_break == PibtOptions::TieBreak::kFreeFirst ? "free-first"
-                                    : o.tie_break == PibtOptions::TieBreak::kHindrance ? "hindrance" : "random"},
-                      {"guidance", guidance_ ? "local" : "none"}};
-  if (guidance_) {
-    p["lg_window"] = guidance_->config().window;
-    p["lg_cost"] = guidance_->config().collision_cost;
-    p["lg_cost_per_kind"] = guidance_->config().cost_per_kind;
-    p["lg_far_cost"] = guidance_->config().far_collision_cost;
-    p["lg_near_steps"] = guidance_->config().near_steps;
-    p["lg_contraflow"] = guidance_->config().contraflow_cost;
-    p["lg_lazy"] = guidance_->config().lazy;
-    p["lg_phases"] = guidance_->config().phases;
-    p["lg_forecast"] = forecast_ ? forecast_->config().steps : 0;
-    if (forecast_) p["lg_forecast_window"] = forecast_->config().window;
-  }
-  return p;
-}
-
-nlohmann::json PibtPlanner::stats() const {
-  nlohmann::json s = {{"swaps", pibt_.swaps()}};
-  if (guidance_) s["guidance_searches"] = guidance_->searches(), s["guidance_expansions"] = guidance_->expansions();
-  return s;
-}
-
-std::vector<Cell> PibtPlanner::planned_path(int agent) const {
-  return guidance_ ? guidance_->path_from(agent, now_) : std::vector<Cell>{};
-}
-
-StepReport PibtPlanner::plan_step(const WorldView& world, std::vector<Cell>& next) {
-  const auto t0 = std::chrono::steady_clock::now();
-  now_ = world.timestep;
-  if (guidance_) {
-    const int n = world.num_agents();
-    order_.resize(n);
-    std::iota(order_.begin(), order_.end(), 0);
-    // Higher-priority agents plan their guidance first, so theirs is the least disturbed.
-    std::stable_sort(order_.begin(), order_.end(),
-                     [&](int a, int b) { return pibt_.priority(a) > pibt_.priority(b); });
-    if (forecast_) forecast_->seed(world, order_, *guidance_);
-    guidance_->update(world, order_);
-    preferred_.resize(n);
-    for (int i = 0; i < n; ++i) preferred_[i] = guidance_->next_cell(i, now_, world.positions[i]);
-    pibt_.step(world, next, {}, {}, &preferred_);
-    if (forecast_) forecast_->roll(world, next, order_, pibt_, *guidance_);
-  } else {
-    pibt_.step(world, next);
-  }
-  return {true, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()};
 }
 
 }  // namespace gdrhcr

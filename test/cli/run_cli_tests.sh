@@ -151,5 +151,34 @@ printf '{"mapFile": "maps/small.map", "agentFile": "wall.agents", "teamSize": 3,
 expect_error "LoRR agent on a wall names the line" "wall.agents:3: cell id 7 \\(1,1\\) is an obstacle" --lorr-problem "$tmp/lorr/wall.json"
 expect_error "LoRR problem with --map" "--map cannot be combined with --lorr-problem" --lorr-problem "$tmp/lorr/problem.json" --map "$m"
 
+# The parameter table: --list-params prints every parameter of the planner with the value in force
+# for the map and fleet (rules applied, given values marked), and runs nothing.
+out=$("$sim" --planner gd-rhcr --list-params --map "$m" --agents 300 --lg-window 12 2>&1)
+code=$?
+if [ "$code" -eq 0 ] && grep -qE '^lg-forecast +8 ' <<<"$out" && grep -qE '^lg-window +12 \*' <<<"$out" &&
+   grep -qE '^k-threshold +20 ' <<<"$out" && grep -qE '^max-density +0.02 ' <<<"$out" &&
+   [ "$(grep -cE '^(preset|V|H|c-soft|lg-contraflow|lg-phases|swap) ' <<<"$out")" -eq 7 ]; then
+  ok "--list-params lists the values in force"
+else
+  bad "--list-params (exit $code: $out)"
+fi
+out=$("$sim" --planner gd-rhcr --list-params --preset paper --map "$repo/maps/warehouse-10-20-10-2-1.map" --agents 400 2>&1)
+if grep -qE '^guidance +none ' <<<"$out" && grep -qE '^max-density +1 ' <<<"$out"; then ok "--list-params with the paper preset"; else bad "--list-params paper ($out)"; fi
+expect_error "--list-params rejects a misspelt parameter" "unknown parameter.*lg-windwo" --planner gd-rhcr --list-params --map "$m" --lg-windwo 3
+expect_error "removed experiment secondary-stay" "unknown parameter.*secondary-stay" --map "$m" --planner gd-rhcr --secondary-stay 3
+if "$sim" --help | grep -q -- "--lg-contraflow"; then ok "--help lists planner parameters"; else bad "--help lists no planner parameters"; fi
+# The result JSON records every parameter in force and where its value came from.
+"$sim" --map "$m" --planner gd-rhcr --agents 50 --steps 20 --V 3 --quiet --out "$tmp/p.json"
+if /usr/bin/python3 - "$tmp/p.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+p, src = r["params"], r["param_sources"]
+assert p["V"] == 3 and src["V"] == "given", (p["V"], src["V"])
+assert p["lg_forecast"] == 8 and src["lg-forecast"] == "rule motion-forecast", src["lg-forecast"]
+assert p["c_soft"] == 1 and src["c-soft"] == "default"
+assert len(src) >= 30 and all(k.replace("-", "_") in p for k in src), sorted(src)
+PY
+then ok "result JSON records every parameter and its source"; else bad "result JSON params/param_sources"; fi
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -4,7 +4,7 @@
 #include <set>
 
 #include "gdrhcr/distinct_goal_stream.hpp"
-#include "gdrhcr/pibt.hpp"
+#include "gdrhcr/guided_pibt.hpp"
 #include "gdrhcr/simulator.hpp"
 
 using namespace gdrhcr;

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "gdrhcr/gd_rhcr.hpp"
+#include "preset_config.hpp"
 #include "gdrhcr/simulator.hpp"
 
 using namespace gdrhcr;
@@ -15,7 +16,7 @@ std::string repo(const std::string& rel) { return std::string(GDRHCR_SOURCE_DIR)
 
 // The paper's configuration (most tests); product_budget_config() is the product default.
 GdRhcrConfig budget_config() {
-  GdRhcrConfig c = GdRhcrConfig::paper();
+  GdRhcrConfig c = preset_config("paper");
   c.node_budget = 200;     // deterministic: no dependence on the machine's speed
   c.timeout_s = 1e6;
   return c;
@@ -220,7 +221,7 @@ TEST(GdRhcr, LargeGroupsUseTheSecondarySolver) {
 TEST(GdRhcr, TwoAgentsInOneCellIsAnErrorNotAHang) {
   Grid g = Grid::from_rows({"@.@", "@@@"});
   DistTable dist(g);
-  for (GdRhcrConfig c : {GdRhcrConfig::paper(), GdRhcrConfig::product()}) {
+  for (GdRhcrConfig c : {preset_config("paper"), preset_config("default")}) {
     GdRhcrPlanner p(g, 2, 1, c);
     std::vector<Cell> pos = {g.cell(1, 0), g.cell(1, 0)};
     std::vector<std::vector<Cell>> goals = {{g.cell(1, 0)}, {g.cell(1, 0)}};
@@ -243,7 +244,7 @@ TEST(GdRhcrProduct, DensityRuleKeepsPbsForLoneAgentsOnly) {
   std::vector<std::string> rows(21, std::string(21, '.'));
   Grid g = Grid::from_rows(rows);
   DistTable dist(g);
-  GdRhcrConfig c = GdRhcrConfig::product();
+  GdRhcrConfig c = preset_config("default");
   c.k_threshold = 5;  // the size rule sends neither group to PIBT
   c.node_budget = 200;
   GdRhcrPlanner p(g, 3, 1, c);
@@ -260,36 +261,3 @@ TEST(GdRhcrProduct, DensityRuleKeepsPbsForLoneAgentsOnly) {
   for (int i = 0; i < 3; ++i) EXPECT_LT(dist.get(goals[i][0], next[i]), dist.get(goals[i][0], pos[i]));
 }
 
-// Hysteresis at group borders (secondary_stay): a pair sent to the secondary solver by the
-// density rule splits up; without hysteresis each half goes back to PBS at once (a solver
-// switch, counted), with secondary_stay = 3 they stay with the secondary solver for 3 more steps.
-TEST(GdRhcrProduct, SecondaryStayKeepsAGroupOnTheSecondarySolverForAWhile) {
-  std::vector<std::string> rows(21, std::string(21, '.'));
-  Grid g = Grid::from_rows(rows);
-  DistTable dist(g);
-  const std::vector<std::vector<Cell>> goals = {{g.cell(5, 2)}, {g.cell(15, 18)}, {g.cell(16, 2)}};
-  const std::vector<Cell> together = {g.cell(5, 10), g.cell(15, 10), g.cell(16, 10)};
-  const std::vector<Cell> apart = {g.cell(5, 10), g.cell(15, 10), g.cell(10, 16)};
-  for (int stay : {0, 3}) {
-    GdRhcrConfig c = GdRhcrConfig::product();
-    c.k_threshold = 5;
-    c.node_budget = 200;
-    c.secondary_stay = stay;
-    GdRhcrPlanner p(g, 3, 1, c);
-    std::vector<Cell> next(3, kNoCell);
-    for (int t = 0; t <= 5; ++t) {
-      const std::vector<Cell>& pos = t == 0 ? together : apart;
-      WorldView w{g, dist, t, pos, goals};
-      p.plan_step(w, next);
-      for (const auto& info : p.last_groups()) {
-        if (info.agents[0] == 0) continue;  // the lone agent, never crowded
-        const bool on_secondary = info.action == GroupAction::ThresholdFallback;
-        EXPECT_EQ(on_secondary, t <= stay) << "stay " << stay << ", t " << t << ", agent " << info.agents[0];
-      }
-    }
-    EXPECT_EQ(p.stats()["solver_switches"].get<long>(), 2) << "stay " << stay;  // agents 1 and 2, once
-  }
-  GdRhcrConfig bad = GdRhcrConfig::product();
-  bad.secondary_stay = -1;
-  EXPECT_THROW(GdRhcrPlanner(g, 3, 1, bad), ParamError);
-}

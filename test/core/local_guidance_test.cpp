@@ -7,8 +7,9 @@
 #include "solver_scenarios.hpp"
 
 #include "gdrhcr/gd_rhcr.hpp"
+#include "preset_config.hpp"
 #include "gdrhcr/local_guidance.hpp"
-#include "gdrhcr/pibt.hpp"
+#include "gdrhcr/guided_pibt.hpp"
 #include "gdrhcr/simulator.hpp"
 #include "gdrhcr/task_stream.hpp"
 #include "gdrhcr/validator.hpp"
@@ -28,7 +29,7 @@ bool is_walk(const Grid& g, const std::vector<Cell>& path) {
 }
 
 GdRhcrConfig product_budget_config() {
-  GdRhcrConfig c = GdRhcrConfig::product();
+  GdRhcrConfig c = preset_config("default");
   c.node_budget = 200;
   c.timeout_s = 1e6;
   return c;
@@ -227,7 +228,7 @@ TEST(GuidedPibt, ReachesAGoalAnIdleAgentIsParkedOn) {
   const Cell goal = g.cell(1, 1);
   LocalGuidanceConfig lg;
   PibtPlanner pibt(g, 2, 1, PibtOptions{}, &lg);
-  GdRhcrPlanner gd(g, 2, 1, GdRhcrConfig::product());
+  GdRhcrPlanner gd(g, 2, 1, preset_config("default"));
   StepValidator check(g);
   for (Planner* p : std::vector<Planner*>{&pibt, &gd}) {
     std::vector<Cell> pos = {g.cell(9, 1), goal};
@@ -333,49 +334,6 @@ TEST(GdRhcrProduct, BandedGuidanceIdenticalAcrossThreadCounts) {
   }
 }
 
-TEST(LocalGuidance, LazyPathsAreRefreshedAndReplacedByAFreeShortestPath) {
-  // Three agents stand across the agent's shortest way for the whole window, so its path
-  // detours (a collision costs more than the detour). Lazy with keep_optimal and refresh 2: the
-  // detour is kept for one step, searched again at two steps old, and once the way is clear a
-  // free shortest path replaces it without a search.
-  Grid g = Grid::load(repo("maps/empty-48-48.map"));
-  DistTable dist(g);
-  LocalGuidanceConfig cfg;
-  cfg.lazy = true;
-  cfg.keep_optimal = true;
-  cfg.refresh = 2;
-  cfg.collision_cost = 100;
-  LocalGuidance lg(g, 4, cfg);
-  std::vector<Cell> pos = {g.cell(0, 0), g.cell(5, 0), g.cell(5, 1), g.cell(5, 2)};
-  const Cell goal = g.cell(10, 0);
-  std::vector<std::vector<Cell>> goals = {{goal}, {pos[1]}, {pos[2]}, {pos[3]}};
-  auto step = [&](int t, bool blocked) {
-    for (int j = 1; j <= 3; ++j)
-      if (blocked) lg.set_path(j, t, std::vector<Cell>(cfg.window + 1, pos[j]));
-      else lg.clear(j);
-    WorldView w{g, dist, t, pos, goals};
-    lg.update(w, {0});
-    return lg.path_from(0, t);
-  };
-  auto path = step(0, true);
-  EXPECT_EQ(lg.searches(), 1);
-  EXPECT_GT(static_cast<int>(path.size()) - 1, dist.get(goal, pos[0]));  // a detour
-  pos[0] = path[1];
-  path = step(1, true);
-  EXPECT_EQ(lg.searches(), 1);  // kept: one step old
-  pos[0] = path[1];
-  path = step(2, true);
-  EXPECT_EQ(lg.searches(), 2);  // two steps old: searched again
-  pos[0] = path[1];
-  path = step(3, false);
-  EXPECT_EQ(lg.searches(), 2);  // the way is clear: a shortest path without a search
-  ASSERT_FALSE(path.empty());
-  EXPECT_EQ(path[0], pos[0]);
-  EXPECT_EQ(path.back(), goal);
-  EXPECT_TRUE(is_walk(g, path));
-  EXPECT_EQ(static_cast<int>(path.size()) - 1, dist.get(goal, pos[0]));
-}
-
 TEST(LocalGuidance, BandedUpdateKeepsApartAgentsApartAndRejectsOnePhase) {
   // Bands of one phase are 2W cells apart or more: a search there cannot reach another's cells.
   Grid g = Grid::load(repo("maps/empty-48-48.map"));
@@ -431,35 +389,30 @@ TEST(GdRhcrProduct, StepBudgetIsHonouredByCounting) {
   EXPECT_THROW(GdRhcrPlanner(g, 10, 1, cfg), ParamError);
 }
 
-TEST(LocalGuidance, KeepsAProvablyOptimalPathAndExtendsIt) {
-  // Alone on an open map, far from its goal: after one step along its path the agent's path
-  // cannot be improved, so with keep_optimal it is kept and extended, not searched again.
+TEST(LocalGuidance, LazyKeepsAValidPathEagerSearchesEveryStep) {
+  // Alone on an open map, far from its goal: after one step along its path, a lazy guidance
+  // keeps the path (still valid, meets nobody); an eager one searches again every step.
   Grid g = Grid::load(repo("maps/empty-48-48.map"));
   DistTable dist(g);
-  LocalGuidanceConfig cfg;
-  cfg.keep_optimal = true;
-  LocalGuidance lg(g, 1, cfg);
-  std::vector<Cell> pos = {g.cell(0, 0)};
-  std::vector<std::vector<Cell>> goals = {{g.cell(47, 47)}};
-  WorldView w0{g, dist, 0, pos, goals};
-  lg.update(w0, {0});
-  EXPECT_EQ(lg.searches(), 1);
-  pos[0] = lg.next_cell(0, 0, pos[0]);
-  WorldView w1{g, dist, 1, pos, goals};
-  lg.update(w1, {0});
-  EXPECT_EQ(lg.searches(), 1);
-  EXPECT_EQ(lg.kept(), 1);
-  const auto path = lg.path_from(0, 1);
-  ASSERT_EQ(static_cast<int>(path.size()), cfg.window + 1);
-  EXPECT_TRUE(is_walk(g, path));
-  for (size_t k = 0; k < path.size(); ++k)  // a step closer to the goal every step
-    EXPECT_EQ(dist.get(goals[0][0], path[k]), dist.get(goals[0][0], pos[0]) - static_cast<int>(k));
-  // Without keep_optimal it is searched again every step.
-  cfg.keep_optimal = false;
-  LocalGuidance again(g, 1, cfg);
-  again.update(w0, {0});
-  again.update(w1, {0});
-  EXPECT_EQ(again.searches(), 2);
+  for (bool lazy : {true, false}) {
+    LocalGuidanceConfig cfg;
+    cfg.lazy = lazy;
+    LocalGuidance lg(g, 1, cfg);
+    std::vector<Cell> pos = {g.cell(0, 0)};
+    std::vector<std::vector<Cell>> goals = {{g.cell(47, 47)}};
+    WorldView w0{g, dist, 0, pos, goals};
+    lg.update(w0, {0});
+    EXPECT_EQ(lg.searches(), 1);
+    pos[0] = lg.next_cell(0, 0, pos[0]);
+    WorldView w1{g, dist, 1, pos, goals};
+    lg.update(w1, {0});
+    EXPECT_EQ(lg.searches(), lazy ? 1 : 2) << (lazy ? "lazy" : "eager");
+    EXPECT_EQ(lg.kept(), lazy ? 1 : 0);
+    const auto path = lg.path_from(0, 1);
+    ASSERT_FALSE(path.empty());
+    EXPECT_EQ(path[0], pos[0]);
+    EXPECT_TRUE(is_walk(g, path));
+  }
 }
 
 // The product default plans guidance 30 steps ahead on maps without many cut cells, up to 2,000

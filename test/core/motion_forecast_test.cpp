@@ -10,8 +10,9 @@
 #include "solver_scenarios.hpp"
 
 #include "gdrhcr/gd_rhcr.hpp"
+#include "preset_config.hpp"
 #include "gdrhcr/motion_forecast.hpp"
-#include "gdrhcr/pibt.hpp"
+#include "gdrhcr/guided_pibt.hpp"
 #include "gdrhcr/simulator.hpp"
 #include "gdrhcr/task_stream.hpp"
 #include "gdrhcr/validator.hpp"
@@ -31,7 +32,7 @@ MotionForecastConfig forecast(int steps) {
 }
 
 GdRhcrConfig product_with_forecast() {
-  GdRhcrConfig c = GdRhcrConfig::product();
+  GdRhcrConfig c = preset_config("default");
   c.forecast = forecast(10);
   c.node_budget = 200;
   c.timeout_s = 1e6;

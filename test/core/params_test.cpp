@@ -41,7 +41,10 @@ TEST(Params, GdRhcrAcceptsThePaperSpellingsAndRejectsBadValuesByName) {
   }
   Params typo;
   typo.set("c_sotf", "1");
-  make_planner("gd-rhcr", typo, g, 4, 1);
-  ASSERT_EQ(typo.unused().size(), 1u);
-  EXPECT_EQ(typo.unused()[0], "c-sotf");
+  try {
+    make_planner("gd-rhcr", typo, g, 4, 1);
+    FAIL() << "misspelt c_sotf accepted";
+  } catch (const ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("c-sotf"), std::string::npos) << e.what();
+  }
 }

@@ -4,7 +4,7 @@
 
 #include "list_stream.hpp"
 
-#include "gdrhcr/pibt.hpp"
+#include "gdrhcr/guided_pibt.hpp"
 #include "gdrhcr/simulator.hpp"
 #include "gdrhcr/validator.hpp"
 
@@ -200,19 +200,3 @@ TEST(Pibt, SwapKeepsCrowdedMapsCollisionFreeAndMoving) {
   }
 }
 
-// The hindrance tie-break (among equally near cells, the one fewer neighbouring agents need):
-// collision-free, and it still gets past a dead-end corridor and moves a crowded map.
-TEST(Pibt, HindranceTieBreakIsCollisionFreeAndMoving) {
-  PibtOptions o;
-  o.tie_break = PibtOptions::TieBreak::kHindrance;
-  Grid corridor = Grid::from_rows({".......", "@@@.@@@", "@@@.@@@", "@@@.@@@", "@@@.@@@"});
-  const Cell deep = corridor.cell(3, 4);
-  ListStream tasks({{corridor.cell(0, 0), deep}, {deep, corridor.cell(6, 0)}});
-  EXPECT_GE(run_pibt(corridor, tasks, {deep, corridor.cell(3, 1)}, 60, 1, o).goals_reached, 3);
-  Grid g = Grid::load(repo("maps/random-32-32-20.map"));
-  RandomNavigationStream with(g, 2), plain(g, 2);
-  auto starts = random_starts(g, 300, 2);
-  SimResult h = run_pibt(g, with, starts, 200, 2, o);
-  SimResult p = run_pibt(g, plain, starts, 200, 2, plain_pibt());
-  EXPECT_GT(h.goals_reached, p.goals_reached);
-}

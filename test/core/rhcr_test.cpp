@@ -120,7 +120,11 @@ TEST(Rhcr, RegistryReadsAndValidatesParameters) {
   bad("timeout", "-1");
   bad("node-budget", "-1");
   Params c;
-  c.set("c-soft", "1");  // RHCR has no soft constraints: the key stays unread, the CLI rejects it
-  make_planner("rhcr", c, g, 10, 1);
-  EXPECT_EQ(c.unused(), std::vector<std::string>{"c-soft"});
+  c.set("c-soft", "1");  // RHCR has no soft constraints: an unknown parameter, named
+  try {
+    make_planner("rhcr", c, g, 10, 1);
+    ADD_FAILURE() << "c-soft accepted by rhcr";
+  } catch (const ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("c-soft"), std::string::npos) << e.what();
+  }
 }

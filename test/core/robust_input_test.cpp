@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "gdrhcr/grid.hpp"
-#include "gdrhcr/pibt.hpp"
+#include "gdrhcr/guided_pibt.hpp"
 #include "gdrhcr/simulator.hpp"
 #include "gdrhcr/task_stream.hpp"
 

@@ -16,16 +16,19 @@
 // so an executed step is never in collision.
 #pragma once
 
-#include <chrono>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "gdrhcr/group_partition.hpp"
+#include "gdrhcr/local_density.hpp"
 #include "gdrhcr/local_guidance.hpp"
 #include "gdrhcr/motion_forecast.hpp"
 #include "gdrhcr/pibt.hpp"
 #include "gdrhcr/planner.hpp"
+#include "gdrhcr/planner_params.hpp"
+#include "gdrhcr/soft_constraint_table.hpp"
+#include "gdrhcr/step_budget.hpp"
 #include "gdrhcr/validator.hpp"
 
 namespace gdrhcr {
@@ -43,30 +46,22 @@ struct GdRhcrConfig {
   double step_budget_s = 0;
   long node_budget = 0;       // deterministic PBS node limit per solve; 0 = none
   int threads = 1;            // thread-pool size for groups replanned in one step
-  std::string solver = "pbs";    // primary: pbs | pibt
-  std::string solver2 = "pibt";  // secondary: pibt
+  std::string solver = "pbs";    // primary: pbs | pibt (the secondary solver is PIBT)
   // Groups in a crowded neighbourhood go to the secondary solver whatever their size: the
   // share of free cells holding an agent within `density_margin` cells of the group's bounding
   // box must be at most `max_density` for the primary solver (1 = no limit, as in the paper).
   double max_density = 1.0;
   int density_margin = 4;
-  // Hysteresis at group borders: a group with an agent whose group was sent to the secondary
-  // solver (by size or crowd) within the last `secondary_stay` steps stays with it (0 = none).
-  int secondary_stay = 0;
   PibtOptions pibt;              // the secondary solver's PIBT techniques
   bool guidance = false;         // the secondary solver follows local guidance paths
   LocalGuidanceConfig lg;        // ... with these settings
   MotionForecastConfig forecast; // ... planned around its agents' motion forecast (steps >= 2)
 
-  // The paper's exact configuration (PBS + plain PIBT, K_threshold = min(floor(0.1 k), 20)):
-  // `--preset paper`, used by the paper-reproduction figures.
-  static GdRhcrConfig paper();
-  // The product default: as the paper, but big or crowded groups (local density above 2%)
-  // go to PIBT with swap following local guidance, and guidance paths stand for those agents
-  // in the other groups' soft constraints. The guidance's window, forecast and costs (contraflow
-  // included) are set per map and fleet size by the planner registry (planner_registry.cpp).
-  static GdRhcrConfig product();
 };
+
+// The configuration the parameter table's values give (the product default, the paper preset
+// and every map-dependent rule live there: planner_params.cpp).
+GdRhcrConfig gd_rhcr_config(const PlannerParams& values, uint64_t seed);
 
 // Why a group was (re)planned this step, or not.
 enum class GroupAction { Reused, Primary, ThresholdFallback, FailureFallback, Repair };
@@ -98,10 +93,24 @@ class GdRhcrPlanner : public Planner {
  private:
   struct Plan;
   struct Job;
+  struct StepWork;
+  // Algorithm 1, one step: partition into groups and pick each group's solver (reusing cached
+  // plans lazily), solve the replanned groups in parallel, adopt their plans, move every agent,
+  // then the final check with repair.
+  void begin_step(const WorldView& world);
+  void assign_groups(const WorldView& world, StepWork& work);
+  void solve_groups(const WorldView& world, StepWork& work) const;
+  void adopt_plans(const WorldView& world, StepWork& work);
+  void move_agents(const WorldView& world, StepWork& work, std::vector<Cell>& next);
+  void merge_and_repair(const WorldView& world, StepWork& work, std::vector<Cell>& next);
+  void record_step(const StepWork& work);
+
+  bool crowded(const WorldView& world, const std::vector<int>& group) const;
   bool needs_replan(const WorldView& world, const std::vector<int>& group) const;
-  void count_density(const WorldView& world);
   void index_agents(const WorldView& world);
-  double local_density(const WorldView& world, const std::vector<int>& group) const;
+  void collect_soft_constraints(const WorldView& world, const std::vector<int>& agents,
+                                SoftConstraintTable& soft) const;
+  std::vector<Cell> soft_path_of(const WorldView& world, int j) const;
   void solve_primary(const WorldView& world, Job& job) const;
   void run_secondary(const WorldView& world, const std::vector<int>& agents,
                      const std::vector<Cell>& next, std::vector<Cell>& out);
@@ -110,7 +119,8 @@ class GdRhcrPlanner : public Planner {
   void roll_forecast(const WorldView& world, const std::vector<int>& secondary,
                      const std::vector<uint8_t>& on_secondary, const std::vector<Cell>& next);
   bool repair_step(const WorldView& world, std::vector<Cell>& next, std::vector<uint8_t>& repaired);
-  int offset_of(int agent, int t) const;
+  std::vector<int> repair_set(const WorldView& world, const std::vector<Cell>& next,
+                              const std::vector<uint8_t>& repaired, int agent_a, int agent_b) const;
 
   const Grid& grid_;
   uint64_t seed_;
@@ -121,6 +131,8 @@ class GdRhcrPlanner : public Planner {
   std::unique_ptr<LocalGuidance> guidance_;  // paths of secondary agents and, as obstacles, plans
   std::unique_ptr<MotionForecast> forecast_;  // the secondary agents' motion, for the guidance
   StepValidator validator_;  // the final check, with its per-cell scratch kept across steps
+  LocalDensity density_;
+  StepBudget budget_;        // this step's
   std::vector<std::shared_ptr<const Plan>> plan_of_;  // lambda_i: the plan agent i follows
   std::vector<int> slot_of_;                          // agent i's row in that plan
   long next_plan_id_ = 1;
@@ -129,8 +141,6 @@ class GdRhcrPlanner : public Planner {
   static constexpr int kBlock = 8;  // spatial index: agents per kBlock x kBlock cells
   std::vector<std::vector<int>> block_agents_;
   int blocks_w_ = 0;
-  std::chrono::steady_clock::time_point step_deadline_ = std::chrono::steady_clock::time_point::max();
-  std::vector<int> free_sum_, agent_sum_;  // 2-D prefix sums (W+1)x(H+1) of free cells, agents
   // This step's taken cells (immovable agents' and WorldView::blocked): blocked for every primary
   // solve, and the same per cell. Written before the parallel phase, read during it.
   std::vector<Cell> taken_cells_;
@@ -145,9 +155,6 @@ class GdRhcrPlanner : public Planner {
   long threshold_fallbacks_ = 0, failure_fallbacks_ = 0, timeouts_ = 0, repairs_ = 0;
   long pbs_nodes_ = 0, soft_conflicts_ = 0, solved_steps_ = 0;
   long guided_moves_ = 0, guidance_missed_ = 0;  // secondary moves with a guidance cell; not onto it
-  long solver_switches_ = 0;  // agent-steps planned by the primary solver right after a secondary move
-  std::vector<int> last_secondary_;  // per agent: the last timestep the secondary solver moved it
-  std::vector<int> last_sent_;       // ... the last timestep its group was sent there (size, crowd)
   double plan_time_sum_all_steps_ = 0, primary_time_sum_ = 0;
 };
 

@@ -57,8 +57,7 @@ struct LocalGuidanceConfig {
   int window = 20;               // W: timesteps each guidance path covers
   double collision_cost = 3.0;   // added per kind of conflict (vertex, swap) a step meets
   // true: a step that meets one path at its cell and another swapping with it pays the cost
-  // twice (once per kind of conflict); false: once, whatever it meets (the rule before issue 11's
-  // session 7).
+  // twice (once per kind of conflict); false: once, whatever it meets.
   bool cost_per_kind = true;
   // Conflicts `near_steps` or more steps ahead of the search's start cost `far_collision_cost`
   // instead (< 0: collision_cost): the further ahead, the less the others' paths foretell.
@@ -68,22 +67,14 @@ struct LocalGuidanceConfig {
   // any time in the window (contraflow), so streams through a door or an aisle keep one
   // direction instead of meeting head-on later (0 = none).
   double contraflow_cost = 0;
-  // false: replan every agent every step unless its kept path is provably as good (it meets
-  // nobody and gains a step on the goal every step); true: keep paths until they are left,
-  // the goal changes, they meet another path or less than `keep` steps are left (cheaper).
+  // false: replan every agent every step; true: keep paths until they are left, the goal
+  // changes, they meet another path or less than `keep` steps are left (cheaper).
   bool lazy = false;
-  // With lazy = false: keep provably optimal paths instead of replanning them (see the .cpp):
-  // about half the CPU time, ~1% lower throughput on empty-48-48 (re-drawn ties spread traffic).
-  bool keep_optimal = false;
   int max_expansions = 4000;    // per search; past it the deepest cheapest node so far is used
   int keep = -1;                 // a kept path must still cover this many steps (-1: window / 2)
   uint64_t seed = 1;             // random order of neighbours in the search
   int recheck = 20;              // a kept path is replanned if it meets another path within this many steps
   int phases = 0;                // 0: one sequential pass; P >= 2: banded parallel update (above)
-  // With lazy = true and keep_optimal = true: a provably optimal path is kept and extended; else
-  // a free shortest path, if a greedy walk finds one, replaces the path without a search; else a
-  // lazily valid path is kept until it is `refresh` steps old (0 = as long as it is valid).
-  int refresh = 0;
   // WorldView::blocked cells count as taken for this many steps from now (-1: the window).
   int blocked_steps = -1;
 };
@@ -158,7 +149,6 @@ class LocalGuidance {
     Marks marks;
     std::vector<Node> nodes;
     std::vector<OpenEntry> open;
-    std::vector<Cell> walk;  // probe_free_path's walk
   };
   struct Parallel;
   void drop_past(int i, int now);
@@ -166,9 +156,7 @@ class LocalGuidance {
   int blocked_steps() const;
   void enroll(int i, int sign);
   bool is_valid(const WorldView& world, int i) const;
-  bool keeps(const WorldView& world, int i, std::minstd_rand& rng, Search& search);
-  bool probe_free_path(const WorldView& world, int i, std::minstd_rand& rng, Search& search);
-  bool still_optimal(const WorldView& world, int i, std::minstd_rand& rng);
+  bool keeps(const WorldView& world, int i) const;
   void update_in_order(const WorldView& world, const std::vector<int>& agents,
                        std::chrono::steady_clock::time_point deadline, Search& search,
                        std::minstd_rand& rng, Counts& counts);
@@ -185,7 +173,6 @@ class LocalGuidance {
   int slots_;
   std::vector<std::vector<Cell>> path_;  // per agent: cells at start_[i], start_[i]+1, ...
   std::vector<int> start_;
-  std::vector<int> planned_at_;          // the timestep each guidance path was searched
   std::vector<Cell> goal_;               // the goal each path was planned for
   // Per (cell, time slot), the slots of one cell side by side (a step's look-ups at t and t+1
   // share a cache line): paths at the cell, and per direction paths leaving it.

@@ -29,10 +29,8 @@ struct PibtOptions {
   bool priority_reset = true;
   bool swap = true;  // LaCAM*'s swap emulation
   // Order among equally near cells: kFreeFirst prefers a cell nobody stands on (fewer pushes),
-  // then random; kRandom is random alone (plain PIBT); kHindrance prefers a cell that fewer
-  // neighbouring agents need on their way to their goals (the next-step hindrance of Okumura's
-  // PIBT tie-breaking work, as used in Lifelong LaCAM with Local Guidance), then free-first.
-  enum class TieBreak { kRandom, kFreeFirst, kHindrance };
+  // then random; kRandom is random alone (plain PIBT).
+  enum class TieBreak { kRandom, kFreeFirst };
   TieBreak tie_break = TieBreak::kFreeFirst;
 };
 
@@ -66,8 +64,7 @@ class PibtStep {
 
  private:
   bool push(const WorldView& world, int ai, int aj, std::vector<Cell>& next);
-  void order_candidates(const WorldView& world, int ai, Cell* cand, int m);
-  int hindrance(const WorldView& world, int ai, Cell c) const;
+  void order_candidates(int ai, Cell* cand, int m);
   int swap_partner(const WorldView& world, int ai, Cell best) const;
   bool needs_swap(Cell pusher_at, Cell puller_at, const DistRow& pusher_row,
                   const DistRow& puller_row) const;
@@ -90,32 +87,6 @@ class PibtStep {
   const std::vector<uint8_t>* immovable_ = nullptr;
   std::vector<int> order_;
   long swaps_ = 0;
-};
-
-class MotionForecast;
-struct MotionForecastConfig;
-
-// PIBT over all agents, optionally following local guidance paths (local_guidance.hpp), planned
-// around the agents' motion forecast when `forecast` has steps >= 2 (motion_forecast.hpp).
-class PibtPlanner : public Planner {
- public:
-  PibtPlanner(const Grid& grid, int num_agents, uint64_t seed, PibtOptions options = {},
-              const LocalGuidanceConfig* guidance = nullptr, const MotionForecastConfig* forecast = nullptr);
-  ~PibtPlanner() override;
-  std::string name() const override { return "pibt"; }
-  StepReport plan_step(const WorldView& world, std::vector<Cell>& next) override;
-  nlohmann::json params() const override;
-  nlohmann::json stats() const override;
-  std::vector<Cell> planned_path(int agent) const override;
-
- private:
-  uint64_t seed_;
-  PibtStep pibt_;
-  std::unique_ptr<LocalGuidance> guidance_;
-  std::unique_ptr<MotionForecast> forecast_;
-  std::vector<int> order_;
-  std::vector<Cell> preferred_;
-  int now_ = 0;
 };
 
 }  // namespace gdrhcr

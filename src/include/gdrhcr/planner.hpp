@@ -2,7 +2,6 @@
 // registry the command line and the ROS node use to build one by name from parameters.
 #pragma once
 
-#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -13,6 +12,7 @@
 #include "gdrhcr/dist_table.hpp"
 #include "gdrhcr/grid.hpp"
 #include "gdrhcr/params.hpp"
+#include "gdrhcr/planner_params.hpp"
 
 namespace gdrhcr {
 
@@ -82,14 +82,14 @@ class Planner {
   virtual std::vector<Cell> planned_path(int /*agent*/) const { return {}; }
 };
 
-// Builds a planner from parameters (e.g. --H 20 from the command line or a ROS param).
-// The factory reads what it needs from `params`; unread parameters are an error for the caller.
-using PlannerFactory = std::function<std::unique_ptr<Planner>(Params& params, const Grid& grid,
-                                                              int num_agents, uint64_t seed)>;
-
 // Planner names known to `make_planner`, in registration order.
 std::vector<std::string> planner_names();
-// Throws std::invalid_argument for an unknown name or a bad parameter value.
+// Builds the planner with the values of the parameter table (PlannerParams::resolve).
+std::unique_ptr<Planner> make_planner(const PlannerParams& values, const Grid& grid, int num_agents,
+                                      uint64_t seed);
+// Resolves `params` (e.g. --H 20 from the command line or a ROS parameter) against the planner's
+// table and builds it. Throws ParamError naming an unknown planner, an unknown parameter or a
+// bad value.
 std::unique_ptr<Planner> make_planner(const std::string& name, Params& params, const Grid& grid,
                                       int num_agents, uint64_t seed);
 

@@ -1,0 +1,30 @@
+// A step's wall-clock budget (GD-RHCR's step_budget): the primary solves get its first 60%, the
+// guidance searches stop at 90%, and the rest is kept for the secondary solver, which moves
+// whatever the solves left, and the final check. No budget: every deadline is open.
+#pragma once
+
+#include <chrono>
+
+namespace gdrhcr {
+
+struct StepBudget {
+  using Clock = std::chrono::steady_clock;
+  static constexpr double kSolveShare = 0.6;
+  static constexpr double kGuidanceShare = 0.9;
+
+  StepBudget() = default;
+  StepBudget(Clock::time_point start, double seconds) {
+    if (seconds <= 0) return;
+    solves = start + share(kSolveShare * seconds);
+    guidance = start + share(kGuidanceShare * seconds);
+  }
+  Clock::time_point solves = Clock::time_point::max();
+  Clock::time_point guidance = Clock::time_point::max();
+
+ private:
+  static Clock::duration share(double s) {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  }
+};
+
+}  // namespace gdrhcr

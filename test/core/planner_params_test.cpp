@@ -1,0 +1,145 @@
+// The parameter table (planner_params.hpp): every planner is built with the values the table
+// resolves, the presets and the named rules pick what the README says, bad names and values are
+// errors naming them, and the README lists every parameter.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "gdrhcr/planner.hpp"
+#include "gdrhcr/planner_params.hpp"
+
+using namespace gdrhcr;
+
+namespace {
+std::string repo(const std::string& rel) { return std::string(GDRHCR_SOURCE_DIR) + "/" + rel; }
+
+PlannerParams resolve(const std::string& planner, Params p, const Grid& g, int agents) {
+  PlannerParams v = PlannerParams::resolve(planner, p, MapFacts(g, agents));
+  p.check_all_used("test");
+  return v;
+}
+
+// Every value the planner reports using that is a table parameter equals the table's value.
+void expect_planner_uses_table(const std::string& planner, Params p, const Grid& g, int agents) {
+  const PlannerParams values = resolve(planner, p, g, agents);
+  Params again = p;
+  const auto built = make_planner(planner, again, g, agents, 1)->params();
+  const auto table = values.to_json();
+  int compared = 0;
+  for (auto& [key, value] : built.items()) {
+    if (!table.contains(key)) continue;
+    EXPECT_EQ(value, table[key]) << planner << " " << key;
+    ++compared;
+  }
+  EXPECT_GE(compared, planner == "rhcr" ? 4 : 8) << planner;
+}
+}  // namespace
+
+TEST(PlannerParams, PlannersAreBuiltWithTheTablesValues) {
+  const Grid warehouse = Grid::load(repo("maps/warehouse-10-20-10-2-1.map"));
+  const Grid random = Grid::load(repo("maps/random-32-32-20.map"));
+  for (const std::string preset : {"default", "paper"})
+    for (const std::string planner : planner_names())
+      for (const Grid* g : {&warehouse, &random})
+        for (int agents : {300, 2500}) {
+          if (agents > static_cast<int>(g->free_cells().size())) continue;
+          Params p;
+          p.set("preset", preset);
+          if (planner == "pibt") p.set("guidance", "local");
+          expect_planner_uses_table(planner, p, *g, agents);
+        }
+}
+
+TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
+  const Grid warehouse = Grid::load(repo("maps/warehouse-10-20-10-2-1.map"));
+  const Grid random = Grid::load(repo("maps/random-32-32-20.map"));  // 2.8% cut cells
+  auto value = [](const std::string& preset, const Grid& g, int agents, const std::string& name) {
+    Params p;
+    p.set("preset", preset);
+    return resolve("gd-rhcr", p, g, agents).text(name);
+  };
+  EXPECT_EQ(value("default", warehouse, 400, "lg-window"), "30");
+  EXPECT_EQ(value("default", random, 300, "lg-window"), "20");
+  EXPECT_EQ(value("default", warehouse, 2500, "lg-window"), "20");
+  EXPECT_EQ(value("paper", warehouse, 400, "lg-window"), "20");
+  EXPECT_EQ(value("default", random, 300, "lg-forecast"), "8");
+  EXPECT_EQ(value("default", warehouse, 400, "lg-forecast"), "0");
+  EXPECT_EQ(value("paper", random, 300, "lg-forecast"), "0");
+  EXPECT_EQ(value("default", random, 300, "lg-far-cost"), "2");
+  EXPECT_EQ(value("default", warehouse, 400, "lg-far-cost"), "-1");
+  EXPECT_EQ(value("default", warehouse, 2500, "lg-lazy"), "1");
+  EXPECT_EQ(value("default", warehouse, 400, "lg-lazy"), "0");
+  EXPECT_EQ(value("default", warehouse, 2500, "lg-cost"), "1.5");
+  EXPECT_EQ(value("default", warehouse, 2500, "lg-phases"), "2");
+  EXPECT_EQ(value("default", warehouse, 400, "k-threshold"), "20");
+  EXPECT_EQ(value("default", warehouse, 15, "k-threshold"), "2");
+  EXPECT_EQ(value("default", warehouse, 400, "guidance"), "local");
+  EXPECT_EQ(value("paper", warehouse, 400, "guidance"), "none");
+  EXPECT_EQ(value("paper", warehouse, 400, "max-density"), "1");
+  EXPECT_EQ(value("paper", warehouse, 400, "swap"), "0");
+  EXPECT_EQ(value("paper", warehouse, 400, "lg-contraflow"), "0");
+  EXPECT_EQ(value("default", warehouse, 400, "lg-contraflow"), "0.1");
+  // Given values win over the preset and the rules, and say so.
+  Params p;
+  p.set("preset", "paper");
+  p.set("lg_window", "12");
+  const PlannerParams v = resolve("gd-rhcr", p, warehouse, 400);
+  EXPECT_EQ(v.integer("lg-window"), 12);
+  for (auto& x : v.values())
+    if (x.spec->name == "lg-window") EXPECT_EQ(x.source, "given");
+}
+
+TEST(PlannerParams, UnknownAndOutOfRangeParametersAreErrorsNamingThem) {
+  const Grid g = Grid::from_rows({"....", "....", "...."});
+  auto message = [&](const std::string& planner, const std::string& key, const std::string& value) {
+    Params p;
+    p.set(key, value);
+    try {
+      make_planner(planner, p, g, 4, 1);
+    } catch (const ParamError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(message("gd-rhcr", "lg_windwo", "3").find("lg-windwo"), std::string::npos);
+  EXPECT_NE(message("pibt", "V", "3").find("V"), std::string::npos);  // PIBT has no V
+  EXPECT_NE(message("gd-rhcr", "max_density", "1.5").find("max-density must be in [0, 1]"), std::string::npos);
+  EXPECT_NE(message("gd-rhcr", "solver", "cbs").find("solver must be one of pbs, pibt"), std::string::npos);
+  EXPECT_NE(message("gd-rhcr", "lg-phases", "1").find("lg-phases"), std::string::npos);
+  EXPECT_NE(message("gd-rhcr", "lg-far-cost", "-0.5").find("lg-far-cost"), std::string::npos);
+  EXPECT_NE(message("gd-rhcr", "swap", "2").find("swap must be in [0, 1]"), std::string::npos);
+  EXPECT_NE(message("gd-rhcr", "preset", "fast").find("preset must be one of default, paper"), std::string::npos);
+  // Experiments that were not kept are gone.
+  for (const char* gone : {"secondary-stay", "solver2", "lg-keep-optimal", "lg-refresh"})
+    EXPECT_NE(message("gd-rhcr", gone, "1").find(gone), std::string::npos) << gone;
+  EXPECT_NE(message("pibt", "tie-break", "hindrance").find("tie-break must be one of"), std::string::npos);
+  EXPECT_THROW(planner_param_specs("astar"), ParamError);
+  EXPECT_TRUE(planner_has_param("gd-rhcr", "K_threshold"));
+  EXPECT_TRUE(planner_has_param("gd-rhcr", "c_soft"));
+  EXPECT_FALSE(planner_has_param("gd-rhcr", "alpha"));
+  EXPECT_TRUE(planner_has_param("rhcr", "alpha"));
+}
+
+// The README's parameter list names every parameter of every planner, and nothing else.
+TEST(PlannerParams, TheReadmeListsEveryParameter) {
+  std::ifstream in(repo("README.md"));
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string readme = text.str();
+  const auto begin = readme.find("<!-- planner parameters -->");
+  const auto end = readme.find("<!-- /planner parameters -->");
+  ASSERT_NE(begin, std::string::npos);
+  ASSERT_NE(end, std::string::npos);
+  const std::string section = readme.substr(begin, end - begin);
+  std::set<std::string> listed, known;
+  for (size_t at = section.find("`--"); at != std::string::npos; at = section.find("`--", at + 1)) {
+    const size_t stop = section.find_first_of(" `", at + 3);
+    listed.insert(section.substr(at + 3, stop - at - 3));
+  }
+  for (auto& planner : planner_names())
+    for (auto& s : planner_param_specs(planner)) known.insert(s.name);
+  for (auto& name : known) EXPECT_TRUE(listed.count(name)) << "README does not list --" << name;
+  for (auto& name : listed) EXPECT_TRUE(known.count(name)) << "README lists --" << name << ", no planner has it";
+}
