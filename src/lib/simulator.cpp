@@ -43,94 +43,129 @@ nlohmann::json SimResult::to_json() const {
             {"late_rule", "a goal is late after 2 x max(shortest distance, 1) steps without reaching it"}}}};
 }
 
+namespace {
+
+// One simulation run: the agents' cells and goals, the planner's steps validated one by one, and
+// the progress figures of the result.
+class Run {
+ public:
+  Run(const Grid& grid, const DistTable& dist, TaskStream& tasks, Planner& planner,
+      const std::vector<Cell>& starts, const SimOptions& options)
+      : grid_(grid), dist_(dist), tasks_(tasks), planner_(planner), opt_(options), n_(static_cast<int>(starts.size())),
+        pos_(starts), next_(n_, kNoCell), from_(starts), goals_(n_), validator_(grid),
+        got_at_(n_, 0), still_(n_, 0), dist0_(n_), late_(n_, 0), ever_late_(n_, 0) {
+    r_.steps = options.steps;
+    r_.agents = n_;
+    validator_.require_valid(pos_, pos_, -1);  // the start itself: free, distinct cells
+    const int lookahead = std::max(1, options.lookahead);
+    for (int i = 0; i < n_; ++i) {
+      Cell last = pos_[i];
+      for (int k = 0; k < lookahead; ++k) goals_[i].push_back(last = tasks_.next_goal(i, last));
+      dist0_[i] = shortest(i);
+    }
+    if (opt_.record_paths) {
+      r_.paths.assign(n_, {});
+      for (int i = 0; i < n_; ++i) r_.paths[i].reserve(opt_.steps + 1), r_.paths[i].push_back(pos_[i]);
+    }
+  }
+
+  SimResult run(const std::vector<Cell>& starts, Clock::time_point t_start) {
+    for (int t = 0; t < opt_.steps; ++t) {
+      plan(t);
+      advance(t);
+    }
+    r_.throughput = opt_.steps > 0 ? double(r_.goals_reached) / opt_.steps : 0;
+    r_.plan_time_mean_s = r_.planned_steps ? plan_sum_ / r_.planned_steps : 0;
+    r_.step_wall_mean_s = opt_.steps > 0 ? wall_sum_ / opt_.steps : 0;
+    r_.step_cpu_mean_s = opt_.steps > 0 ? cpu_sum_ / opt_.steps : 0;
+    for (int i = 0; i < n_; ++i) r_.late_at_end += late_[i];
+    r_.free_flow_throughput = free_flow_throughput(grid_, dist_, tasks_, starts, opt_.steps);
+    r_.wall_time_s = seconds_since(t_start);
+    return std::move(r_);
+  }
+
+ private:
+  int shortest(int i) const { return std::max(1, std::min(dist_.get(goals_[i].front(), pos_[i]), kUnreachable)); }
+
+  // The planner's step, timed and validated (a collision throws CollisionError).
+  void plan(int t) {
+    std::fill(next_.begin(), next_.end(), kNoCell);
+    WorldView view{grid_, dist_, t, pos_, goals_};
+    const auto t0 = Clock::now();
+    const double c0 = process_cpu_s();
+    const StepReport rep = planner_.plan_step(view, next_);
+    const double wall = seconds_since(t0);
+    cpu_sum_ += process_cpu_s() - c0;
+    wall_sum_ += wall;
+    r_.step_wall_max_s = std::max(r_.step_wall_max_s, wall);
+    if (rep.planned) {
+      ++r_.planned_steps;
+      plan_sum_ += rep.plan_time_s;
+      r_.plan_time_max_s = std::max(r_.plan_time_max_s, rep.plan_time_s);
+    }
+    validator_.require_valid(pos_, next_, t);
+  }
+
+  // Executes the step: agents on their goal get the next one. A goal equal to the cell it was
+  // drawn from (only an agent alone in a one-cell component gets one) is a task of length zero
+  // and is not counted.
+  void advance(int t) {
+    for (int i = 0; i < n_; ++i) {
+      still_[i] = (next_[i] == pos_[i] && next_[i] != goals_[i].front()) ? still_[i] + 1 : 0;
+      r_.longest_wait = std::max(r_.longest_wait, still_[i]);
+    }
+    pos_.swap(next_);
+    for (int i = 0; i < n_; ++i) {
+      check_late(i, t + 1);
+      if (pos_[i] != goals_[i].front()) continue;
+      if (goals_[i].front() != from_[i]) ++r_.goals_reached;
+      from_[i] = goals_[i].front();
+      goals_[i].erase(goals_[i].begin());
+      goals_[i].push_back(tasks_.next_goal(i, goals_[i].empty() ? pos_[i] : goals_[i].back()));
+      got_at_[i] = t + 1;
+      late_[i] = 0;
+      dist0_[i] = shortest(i);
+    }
+    if (opt_.record_paths)
+      for (int i = 0; i < n_; ++i) r_.paths[i].push_back(pos_[i]);
+  }
+
+  // A goal is late once its agent has spent more than twice its shortest distance on it.
+  void check_late(int i, int now) {
+    const double ratio = double(now - got_at_[i]) / dist0_[i];
+    if (dist0_[i] < kUnreachable) r_.max_lateness = std::max(r_.max_lateness, ratio);
+    if (!late_[i] && now - got_at_[i] > 2 * dist0_[i] && dist0_[i] < kUnreachable) {
+      late_[i] = 1;
+      ++r_.goals_late;
+      if (!ever_late_[i]) ever_late_[i] = 1, ++r_.agents_late;
+    }
+  }
+
+  const Grid& grid_;
+  const DistTable& dist_;
+  TaskStream& tasks_;
+  Planner& planner_;
+  const SimOptions& opt_;
+  const int n_;
+  SimResult r_;
+  std::vector<Cell> pos_, next_;
+  std::vector<Cell> from_;  // the cell each agent's current goal was drawn from
+  std::vector<std::vector<Cell>> goals_;
+  StepValidator validator_;
+  // Progress: when each agent got its current goal, its shortest distance then, whether that goal
+  // is counted late, and how long the agent has stood still.
+  std::vector<int> got_at_, still_, dist0_;
+  std::vector<uint8_t> late_, ever_late_;
+  double plan_sum_ = 0, wall_sum_ = 0, cpu_sum_ = 0;
+};
+
+}  // namespace
+
 SimResult run_simulation(const Grid& grid, const DistTable& dist, TaskStream& tasks,
                          Planner& planner, const std::vector<Cell>& starts,
                          const SimOptions& options) {
   const auto t_start = Clock::now();
-  const int n = static_cast<int>(starts.size());
-  const int lookahead = std::max(1, options.lookahead);
-  SimResult r;
-  r.steps = options.steps;
-  r.agents = n;
-
-  std::vector<Cell> pos = starts, next(n, kNoCell);
-  StepValidator validator(grid);
-  // The start must itself be a valid configuration: free, distinct cells.
-  validator.require_valid(pos, pos, -1);
-
-  std::vector<std::vector<Cell>> goals(n);
-  // from[i]: the cell agent i's current goal was drawn from. A goal equal to it (only an agent
-  // alone in a one-cell component gets one) is a task of length zero and is not counted.
-  std::vector<Cell> from = pos;
-  for (int i = 0; i < n; ++i) {
-    Cell last = pos[i];
-    for (int k = 0; k < lookahead; ++k) goals[i].push_back(last = tasks.next_goal(i, last));
-  }
-  if (options.record_paths) {
-    r.paths.assign(n, {});
-    for (int i = 0; i < n; ++i) r.paths[i].reserve(options.steps + 1), r.paths[i].push_back(pos[i]);
-  }
-
-  // Progress bookkeeping: when each agent got its current goal, its shortest distance then,
-  // whether that goal is already counted late, and how long the agent has stood still.
-  std::vector<int> got_at(n, 0), still(n, 0);
-  std::vector<int> dist0(n);
-  std::vector<uint8_t> late(n, 0), ever_late(n, 0);
-  for (int i = 0; i < n; ++i) dist0[i] = std::max(1, std::min(dist.get(goals[i].front(), pos[i]), kUnreachable));
-  auto check_late = [&](int i, int now) {
-    const double ratio = double(now - got_at[i]) / dist0[i];
-    if (dist0[i] < kUnreachable) r.max_lateness = std::max(r.max_lateness, ratio);
-    if (!late[i] && now - got_at[i] > 2 * dist0[i] && dist0[i] < kUnreachable) {
-      late[i] = 1;
-      ++r.goals_late;
-      if (!ever_late[i]) ever_late[i] = 1, ++r.agents_late;
-    }
-  };
-
-  double plan_sum = 0, wall_sum = 0, cpu_sum = 0;
-  for (int t = 0; t < options.steps; ++t) {
-    std::fill(next.begin(), next.end(), kNoCell);
-    WorldView view{grid, dist, t, pos, goals};
-    const auto t0 = Clock::now();
-    const double c0 = process_cpu_s();
-    const StepReport rep = planner.plan_step(view, next);
-    const double wall = seconds_since(t0);
-    cpu_sum += process_cpu_s() - c0;
-    wall_sum += wall;
-    r.step_wall_max_s = std::max(r.step_wall_max_s, wall);
-    if (rep.planned) {
-      ++r.planned_steps;
-      plan_sum += rep.plan_time_s;
-      r.plan_time_max_s = std::max(r.plan_time_max_s, rep.plan_time_s);
-    }
-    validator.require_valid(pos, next, t);
-    for (int i = 0; i < n; ++i) {
-      still[i] = (next[i] == pos[i] && next[i] != goals[i].front()) ? still[i] + 1 : 0;
-      r.longest_wait = std::max(r.longest_wait, still[i]);
-    }
-    pos.swap(next);
-    for (int i = 0; i < n; ++i) {
-      check_late(i, t + 1);
-      if (pos[i] != goals[i].front()) continue;
-      if (goals[i].front() != from[i]) ++r.goals_reached;
-      from[i] = goals[i].front();
-      goals[i].erase(goals[i].begin());
-      goals[i].push_back(tasks.next_goal(i, goals[i].empty() ? pos[i] : goals[i].back()));
-      got_at[i] = t + 1;
-      late[i] = 0;
-      dist0[i] = std::max(1, std::min(dist.get(goals[i].front(), pos[i]), kUnreachable));
-    }
-    if (options.record_paths)
-      for (int i = 0; i < n; ++i) r.paths[i].push_back(pos[i]);
-  }
-  r.throughput = options.steps > 0 ? double(r.goals_reached) / options.steps : 0;
-  r.plan_time_mean_s = r.planned_steps ? plan_sum / r.planned_steps : 0;
-  r.step_wall_mean_s = options.steps > 0 ? wall_sum / options.steps : 0;
-  r.step_cpu_mean_s = options.steps > 0 ? cpu_sum / options.steps : 0;
-  for (int i = 0; i < n; ++i) r.late_at_end += late[i];
-  r.free_flow_throughput = free_flow_throughput(grid, dist, tasks, starts, options.steps);
-  r.wall_time_s = seconds_since(t_start);
-  return r;
+  return Run(grid, dist, tasks, planner, starts, options).run(starts, t_start);
 }
 
 double free_flow_throughput(const Grid& grid, const DistTable& dist, const TaskStream& tasks,

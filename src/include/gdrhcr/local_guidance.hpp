@@ -9,18 +9,17 @@
 // A step pays the collision cost for meeting a path at its cell (vertex) and again for swapping
 // with one (cost_per_kind): stepping into a cell another agent will hold while a third comes the
 // other way is two conflicts to resolve, and guidance that counts it once leads agents into
-// oncoming streams (random-32-32-20, 300 agents: +1.3% throughput; docs/results.md, issue 11).
+// oncoming streams.
 //
 // Contraflow (traffic-aware guidance, after Chen, Harabor, Li, Stuckey, "Traffic Flow
 // Optimisation for Lifelong Multi-Agent Path Finding", AAAI 2024): a step along an edge also
 // pays a small cost per guidance path that goes the other way along it anywhere in the window,
 // not only at the same time. Agents then pick lanes, aisles and doors that others use in their
-// own direction, and streams stop meeting head-on (issue 11, session 8: warehouse-10-20-10-2-1
-// 800 +4%, random-32-32-20 300 +3%, room maps +4-7%).
+// own direction, and streams stop meeting head-on.
 //
-// With the motion forecast (maps with many cut cells), conflicts 3 or more steps ahead cost 2
-// instead of 3 (far_collision_cost): random-32-32-20 300, seeds 1-10, +1.3%; on warehouses,
-// without the forecast, it loses 1.6-2% (docs/results.md, issue 11, session 7).
+// Conflicts `near_steps` or more steps ahead may cost less (far_collision_cost): the further
+// ahead, the less the others' paths foretell. The defaults of all these costs, and the figures
+// behind them, are in the parameter table (planner_params.cpp) and docs/results.md.
 //
 // A search ends at the window's end or on the goal (the agent gets its next goal there).
 // Guidance paths are kept across steps in absolute time and replanned lazily: when the agent is
@@ -32,7 +31,7 @@
 // count as taken in every search for `blocked_steps` steps, so guidance goes around them when a
 // detour is cheaper than the wait.
 //
-// Parallel update (fleets of thousands, issue 12): with `phases` P >= 2 the map is cut into
+// Parallel update (fleets of thousands): with `phases` P >= 2 the map is cut into
 // bands across its longer side, each ceil(2W / (P - 1)) cells wide, and band b is updated in
 // phase b mod P. After stale paths are dropped every path starts at its agent's cell, so a
 // search, its path and the path it replaces stay within W cells of the agent: two bands of one
