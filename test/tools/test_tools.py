@@ -211,5 +211,36 @@ class GroupPictureTest(unittest.TestCase):
         self.assertEqual(links, [(1, 2)])
 
 
+class ExperimentConfigTest(unittest.TestCase):
+    """Every planner option in config/experiments/*.yaml is a parameter of that planner in the
+    parameter table (as `gdrhcr_sim --help` lists it), so a sweep never dies on a misspelt one."""
+
+    def planner_params(self):
+        out = subprocess.run([SIM, "--help"], capture_output=True, text=True, check=True).stdout
+        params, planner = {}, None
+        for line in out.splitlines():
+            if line.startswith("--planner "):
+                planner = line.split()[1]
+                params[planner] = set()
+            elif planner and line.startswith("  --"):
+                params[planner].add(line.split()[0][2:])
+        return params
+
+    def test_experiment_configs_use_known_parameters(self):
+        known = self.planner_params()
+        self.assertEqual(sorted(known), ["gd-rhcr", "pibt", "rhcr"])
+        configs = sorted(f for f in os.listdir(os.path.join(ROOT, "config", "experiments")) if f.endswith(".yaml"))
+        self.assertGreater(len(configs), 3)
+        for name in configs:
+            runs = gdrhcr_sweep.expand(gdrhcr_sweep.load_config(os.path.join(ROOT, "config", "experiments", name)))
+            for run in runs:
+                opts = dict(run["options"])
+                planner = opts.pop("planner", "pibt")
+                for key in opts:
+                    canon = key.replace("_", "-") if len(key) > 1 else key
+                    canon = canon.lower() if len(canon) > 1 else canon
+                    self.assertIn(canon, known[planner], "%s: %s has no parameter %s" % (name, planner, key))
+
+
 if __name__ == "__main__":
     unittest.main()
