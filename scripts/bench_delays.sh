@@ -2,15 +2,15 @@
 # Delay benchmark (issue 13): the headless warehouse (soak.launch without faults: planner node with
 # GD-RHCR on warehouse-10-20-10-2-1 at 2 Hz, fleet_sim, a full-load task generator) with fleet_sim's
 # interlock (safety stop) OFF, once without delays and once with LoRR-2026 random delays (a robot
-# starts a delay with probability P_DELAY per tick, lasting 1..MAX_DELAY ticks), for each execution
-# mode in EXECUTIONS (adg = the Action Dependency Graph execution layer, the default; lockstep = the
-# node's execution before issue 13, with the moving robot's destination reserved). Prints figures
-# and writes results/delays.json; not a test.
+# starts a delay with probability P_DELAY per tick, lasting 1..MAX_DELAY ticks), with the node's
+# execution layer (the Action Dependency Graph). Prints figures and writes results/delays.json;
+# not a test.
 #   bash scripts/bench_delays.sh                                  # ROBOTS=300 DURATION=180
-#   ROBOTS=50 DURATION=60 EXECUTIONS=adg bash scripts/bench_delays.sh
+#   ROBOTS=50 DURATION=60 bash scripts/bench_delays.sh
 # Environment: ROBOTS (300), DURATION (s per run, 180), P_DELAY (0.01), MAX_DELAY (20 ticks),
 # SPEED_SPREAD (0: every robot takes move_fraction of a tick per move), PLANNER (gd-rhcr),
-# EXECUTIONS ("adg lockstep"), SEED (1), OUT (results/delays.json). Needs the workspace built
+# EXECUTIONS (adg, the only execution since issue 22; kept so older command lines still run),
+# SEED (1), OUT (results/delays.json). Needs the workspace built
 # (scripts/ros_build.sh). Holds /tmp/gdrhcr_ros.lock while it runs (one ROS run at a time).
 set -eo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
@@ -20,7 +20,14 @@ P_DELAY=${P_DELAY:-0.01}
 MAX_DELAY=${MAX_DELAY:-20}
 SPEED_SPREAD=${SPEED_SPREAD:-0.0}
 PLANNER=${PLANNER:-gd-rhcr}
-EXECUTIONS=${EXECUTIONS:-"adg lockstep"}
+EXECUTIONS=${EXECUTIONS:-adg}
+for ex in $EXECUTIONS; do
+  if [ "$ex" != adg ]; then
+    echo "bench_delays: EXECUTIONS='$EXECUTIONS': adg is the only execution (lock-step was removed in issue 22)" >&2
+    exit 2
+  fi
+done
+EXECUTIONS=adg
 SEED=${SEED:-1}
 OUT=${OUT:-$top/results/delays.json}
 ws="${GDRHCR_WS:-$top/.ws}"
@@ -35,7 +42,7 @@ for ex in $EXECUTIONS; do
     out="$ROS_HOME/bench_delays_${ex}_p${p}.json"
     rm -f "$out"
     echo "bench_delays: $ex, $ROBOTS robots, p_delay $p, D $MAX_DELAY, interlock off, ${DURATION}s -> $out"
-    flock /tmp/gdrhcr_ros.lock roslaunch -p 11712 gd_rhcr_planner soak.launch faults:=false execution:="$ex" \
+    flock /tmp/gdrhcr_ros.lock roslaunch -p 11712 gd_rhcr_planner soak.launch faults:=false \
       num_robots:="$ROBOTS" planner:="$PLANNER" seed:="$SEED" duration:="$DURATION" robot_steps:=1000000000 \
       p_delay:="$p" max_delay_ticks:="$MAX_DELAY" speed_spread:="$SPEED_SPREAD" interlock:=false \
       output:="$out" >"$ROS_HOME/bench_delays_${ex}_p${p}.log" 2>&1 || true

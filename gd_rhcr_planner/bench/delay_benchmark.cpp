@@ -1,12 +1,12 @@
 // Delay-robust execution without ROS (issue 13): the planner node's execution layer (Executor,
-// ADG or lock-step) and a core planner drive simulated robots (delayed_fleet.hpp: no safety
+// the Action Dependency Graph) and a core planner drive simulated robots (delayed_fleet.hpp: no safety
 // interlock, LoRR-2026 random delays) with random goals; once without delays and once with
 // p_delay per robot and tick, delays of 1..D ticks. Prints goals reached per tick, the ratio with
 // delays to without, and robots delayed and waiting per tick; any collision, bad command or
 // broken ADG invariant aborts the run. A benchmark (prints figures), not a test; seconds per run,
 // so ideas can be tried here before the ROS benchmark (scripts/bench_delays.sh).
 //   delay_benchmark --map maps/warehouse-10-20-10-2-1.map --robots 300 --ticks 300 --p-delay 0.01
-//       --max-delay 20 --planner gd-rhcr --execution adg --speed 6 --seeds 1 --commit-horizon 2
+//       --max-delay 20 --planner gd-rhcr --speed 6 --seeds 1 --commit-horizon 2
 //       --between 1 [--param key=value ...]   (planner parameters, e.g. --param guidance=none)
 // --between 1 (default): moves are dispatched the moment the robots ahead have left (the node's
 // dispatch timer, Executor::advance after every substep); 0: at ticks only. --revoke 1 (default):
@@ -29,7 +29,7 @@ using namespace gd_rhcr_planner;
 namespace {
 
 struct Options {
-  std::string map = "maps/warehouse-10-20-10-2-1.map", planner = "gd-rhcr", execution = "adg";
+  std::string map = "maps/warehouse-10-20-10-2-1.map", planner = "gd-rhcr";
   int robots = 300, ticks = 300, max_delay = 20, speed = 6, seeds = 1, commit_horizon = 2, between = 1, revoke = 1;  // the node's defaults
   double p_delay = 0.01;
   std::vector<std::pair<std::string, std::string>> params;  // --param key=value, for the planner
@@ -52,7 +52,6 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
   params.check_all_used(o.planner);  // a misspelt --param is an error, not ignored
   DeadlinePlanner planner(std::move(primary), gdrhcr::make_planner("pibt", none, g, o.robots, seed));
   ExecutorConfig cfg;
-  cfg.mode = parse_execution_mode(o.execution);
   cfg.commit_horizon = o.commit_horizon;
   cfg.revoke_behind_late = o.revoke != 0;
   Executor ex(g, dist, o.robots, cfg);
@@ -63,7 +62,7 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
     const TickOutput out = ex.tick(fleet.records(), goals, planner, true);
     if (!out.stepped) r.error = "no step: " + out.skip_reason;
     else if (!out.plan_error.empty()) r.error = "plan rejected: " + out.plan_error;
-    else if (cfg.mode == ExecutionMode::kAdg) r.error = ex.check_invariants();
+    else r.error = ex.check_invariants();
     if (r.error.empty())
       r.error = fleet.execute(out, p_delay, o.max_delay, o.between ? DelayedFleet::on_arrival(ex) : nullptr);
     if (!r.error.empty()) {
@@ -94,7 +93,6 @@ int main(int argc, char** argv) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--map") o.map = v;
     else if (k == "--planner") o.planner = v;
-    else if (k == "--execution") o.execution = v;
     else if (k == "--robots") o.robots = std::atoi(v.c_str());
     else if (k == "--ticks") o.ticks = std::atoi(v.c_str());
     else if (k == "--max-delay") o.max_delay = std::atoi(v.c_str());
@@ -108,7 +106,7 @@ int main(int argc, char** argv) {
     else if (k == "--p-delay") o.p_delay = std::atof(v.c_str());
     else {
       std::fprintf(stderr,
-                   "unknown option %s (--map --planner --execution --robots --ticks --p-delay --max-delay --speed "
+                   "unknown option %s (--map --planner --robots --ticks --p-delay --max-delay --speed "
                    "--seeds --commit-horizon --between 0|1 --revoke 0|1 --param key=value)\n",
                    k.c_str());
       return 2;
@@ -121,11 +119,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    parse_execution_mode(o.execution);
     const LoadedMap map = load_map(o.map, 1.0);
-    std::printf("map %s, %d robots, planner %s, execution %s (commit horizon %d, dispatch %s), %d ticks, moves take %.1f tick, "
+    std::printf("map %s, %d robots, planner %s, ADG execution (commit horizon %d, dispatch %s), %d ticks, moves take %.1f tick, "
                 "delays p %.3f per tick of 1..%d ticks, random goals\n",
-                o.map.c_str(), o.robots, o.planner.c_str(), o.execution.c_str(), o.commit_horizon,
+                o.map.c_str(), o.robots, o.planner.c_str(), o.commit_horizon,
                 o.between ? "on arrival" : "at ticks", o.ticks,
                 o.speed / double(SimRobot::kSub), o.p_delay, o.max_delay);
     std::printf("%5s %14s %14s %7s %16s %16s %12s %14s\n", "seed", "goals/tick no", "goals/tick p", "ratio",

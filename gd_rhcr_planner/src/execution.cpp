@@ -1,24 +1,15 @@
-// Execution layer: Action Dependency Graph over a rolling horizon (Hönig et al., RA-L 2019) and
-// the older lock-step mode. See include/gd_rhcr_planner/execution.hpp.
+// Execution layer: Action Dependency Graph over a rolling horizon (Hönig et al., RA-L 2019).
+// See include/gd_rhcr_planner/execution.hpp.
 #include "gd_rhcr_planner/execution.hpp"
 
 #include <algorithm>
 #include <iterator>
-#include <map>
 
 #include "gdrhcr/params.hpp"
 
 namespace gd_rhcr_planner {
 
 using gdrhcr::kNoCell;
-
-ExecutionMode parse_execution_mode(const std::string& name) {
-  if (name == "adg") return ExecutionMode::kAdg;
-  if (name == "lockstep") return ExecutionMode::kLockstep;
-  throw gdrhcr::ParamError("~execution must be 'adg' or 'lockstep', not '" + name + "'");
-}
-
-const char* execution_mode_name(ExecutionMode m) { return m == ExecutionMode::kAdg ? "adg" : "lockstep"; }
 
 const char* robot_health_name(RobotHealth h) {
   switch (h) {
@@ -65,7 +56,7 @@ void Executor::add_blocked_cells(int r, std::vector<Cell>& blocked) const {
     for (Cell nb : grid_.neighbours(t.cell)) blocked.push_back(nb);
 }
 
-void Executor::reconcile_adg(const std::vector<RobotRecord>& robots, TickOutput& out) {
+void Executor::reconcile(const std::vector<RobotRecord>& robots, TickOutput& out) {
   bool need_resync = false;
   auto who = [&](int r) { return "robot " + std::to_string(r); };
   for (int r = 0; r < num_robots(); ++r) {
@@ -182,7 +173,7 @@ void Executor::arrive(int r) {
 
 std::vector<int> Executor::advance(const std::vector<RobotRecord>& robots, const std::vector<uint8_t>* hold) {
   std::vector<int> changed;
-  if (cfg_.mode != ExecutionMode::kAdg || static_cast<int>(robots.size()) != num_robots()) return changed;
+  if (static_cast<int>(robots.size()) != num_robots()) return changed;
   bool arrived = false;
   for (int r = 0; r < num_robots(); ++r) {
     Track& t = tracks_[r];
@@ -351,7 +342,6 @@ int hold_rotations(const std::vector<Cell>& pos, std::vector<Cell>& next, std::v
 
 void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, DeadlinePlanner& planner,
                                TickOutput& out) {
-  const bool adg = cfg_.mode == ExecutionMode::kAdg;
   std::vector<int>& robot_of = out.robot_of_agent;
   robot_of.clear();
   for (int r = 0; r < num_robots(); ++r)
@@ -367,7 +357,7 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, Dead
     const Track& t = tracks_[r];
     const bool ok = t.health == RobotHealth::kOk;
     Cell end = t.cell;
-    if (adg && ok && !t.path.empty()) end = t.path.back();
+    if (ok && !t.path.empty()) end = t.path.back();
     positions[a] = end;
     if (!ok) {
       immovable[a] = 1;
@@ -376,26 +366,19 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, Dead
       agent_goals[a] = {t.cell};
       continue;
     }
-    if (adg) {
-      // A robot with commit_horizon moves committed and not finished (the one it is making
-      // included: a robot still on its way at the next tick is late) gets no further move in
-      // this step; the others plan around its end state, so no commitments pile up behind a
-      // late robot.
-      immovable[a] = static_cast<int>(t.path.size()) >= cfg_.commit_horizon || holds(r);
-      // Cells the planner must keep everybody out of in this step, as no robot there will leave
-      // it soon: a late robot's (commanded in an earlier tick, not arrived) still fills the
-      // cell it leaves, and a robot waiting for its committed move fills its cell until its
-      // move is dispatched and made. Behind such a robot others would only queue: the planner
-      // routes them around (WorldView::blocked), and the hold cascade below still holds any
-      // move into them.
-      if ((t.dispatched && t.dispatched_at < ticks_) || (!t.dispatched && !t.path.empty())) late_cells.push_back(t.cell);
-      agent_goals[a] = holds(r) ? std::vector<Cell>{end} : planner_goals(r, goals[r], end);
-    } else {
-      // Lock-step: a robot still moving is held, and the cell it enters is reserved (issue 13).
-      immovable[a] = t.unknown_move || holds(r);
-      if (t.unknown_move && t.last_target != kNoCell && t.last_target != t.cell) blocked.push_back(t.last_target);
-      agent_goals[a] = goals[r].empty() ? std::vector<Cell>{t.cell} : goals[r];
-    }
+    // A robot with commit_horizon moves committed and not finished (the one it is making
+    // included: a robot still on its way at the next tick is late) gets no further move in
+    // this step; the others plan around its end state, so no commitments pile up behind a
+    // late robot.
+    immovable[a] = static_cast<int>(t.path.size()) >= cfg_.commit_horizon || holds(r);
+    // Cells the planner must keep everybody out of in this step, as no robot there will leave
+    // it soon: a late robot's (commanded in an earlier tick, not arrived) still fills the
+    // cell it leaves, and a robot waiting for its committed move fills its cell until its
+    // move is dispatched and made. Behind such a robot others would only queue: the planner
+    // routes them around (WorldView::blocked), and the hold cascade below still holds any
+    // move into them.
+    if ((t.dispatched && t.dispatched_at < ticks_) || (!t.dispatched && !t.path.empty())) late_cells.push_back(t.cell);
+    agent_goals[a] = holds(r) ? std::vector<Cell>{end} : planner_goals(r, goals[r], end);
   }
   for (const Track& t : tracks_)
     if (!t.active && t.claimed != kNoCell) blocked.push_back(t.claimed);
@@ -423,7 +406,7 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, Dead
   out.planner_called = true;
   std::vector<uint8_t> held = immovable;
   hold_cascade(grid_, positions, next, held, blocked);
-  if (adg && hold_rotations(positions, next, held) > 0) hold_cascade(grid_, positions, next, held, blocked);
+  if (hold_rotations(positions, next, held) > 0) hold_cascade(grid_, positions, next, held, blocked);
   if (auto violation = validator_.check(positions, next)) {
     out.plan_error = violation->describe(grid_, static_cast<int>(steps_));
     next = positions;
@@ -433,37 +416,9 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, Dead
   for (int a = 0; a < na; ++a) {
     const int r = robot_of[a];
     Track& t = tracks_[r];
-    if (adg) {
-      if (next[a] == positions[a]) continue;
-      t.path.push_back(next[a]);
-      visits_[next[a]].push_back(r);
-    } else {
-      out.command[r] = next[a];
-      out.end_state[r] = next[a];
-      if (next[a] != t.cell) t.last_target = next[a];
-    }
-  }
-}
-
-void Executor::reconcile_lockstep(const std::vector<RobotRecord>& robots, TickOutput& out) {
-  for (int r = 0; r < num_robots(); ++r) {
-    Track& t = tracks_[r];
-    const RobotRecord& rec = robots[r];
-    if (!rec.reported) continue;
-    const RobotHealth h = rec.silent ? RobotHealth::kSilent : rec.reported_offline ? RobotHealth::kOffline : RobotHealth::kOk;
-    if (h != t.health && t.active && (h != RobotHealth::kOk))
-      out.warnings.push_back("robot " + std::to_string(r) + " is " + robot_health_name(h) + ": an obstacle at " +
-                             grid_.describe(rec.cell));
-    t.active = true;
-    t.health = h;
-    t.cell = rec.cell;
-    // A robot reported moving keeps the cell of its last move command reserved until it stops
-    // (unknown_move marks "moving" in this mode); a silent robot keeps it reserved too.
-    t.unknown_move = rec.moving && !rec.silent;
-    if (!rec.moving && !rec.silent) t.last_target = kNoCell;
-    t.dispatched = rec.silent && t.last_target != kNoCell && t.last_target != t.cell;
-    t.path.clear();
-    if (t.dispatched) t.path.push_back(t.last_target);
+    if (next[a] == positions[a]) continue;
+    t.path.push_back(next[a]);
+    visits_[next[a]].push_back(r);
   }
 }
 
@@ -489,28 +444,11 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
   }
   out.command.assign(n, kNoCell);
   out.end_state.assign(n, kNoCell);
-  if (cfg_.mode == ExecutionMode::kAdg) {
-    reconcile_adg(robots, out);
-    dispatch_ready(out, ticks_);
-    if (cfg_.revoke_behind_late) out.revoked = revoke_behind_late();
-    plan_and_commit(goals, planner, out);
-    dispatch_ready(out, ticks_);
-  } else {
-    reconcile_lockstep(robots, out);
-    std::map<Cell, int> at;
-    for (int r = 0; r < n; ++r) {
-      if (!tracks_[r].active) continue;
-      auto [it, fresh] = at.emplace(tracks_[r].cell, r);
-      if (!fresh) {
-        out.skip_reason = "robot states inconsistent: robots " + std::to_string(it->second) + " and " +
-                          std::to_string(r) + " both report cell " + grid_.describe(tracks_[r].cell);
-        out.command.clear();
-        out.end_state.clear();
-        return out;
-      }
-    }
-    plan_and_commit(goals, planner, out);
-  }
+  reconcile(robots, out);
+  dispatch_ready(out, ticks_);
+  if (cfg_.revoke_behind_late) out.revoked = revoke_behind_late();
+  plan_and_commit(goals, planner, out);
+  dispatch_ready(out, ticks_);
   out.stepped = true;
   out.cells.assign(n, kNoCell);
   out.health.assign(n, RobotHealth::kMissing);
@@ -519,15 +457,10 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
     out.health[r] = t.health;
     if (!t.active) continue;
     out.cells[r] = t.cell;
-    if (cfg_.mode == ExecutionMode::kAdg) {
-      // On hold and at rest: told to stay; its commanded cell stays reserved for when it is released.
+    // On hold and at rest: told to stay; its commanded cell stays reserved for when it is released.
     out.command[r] = t.dispatched && !(holds(r) && !t.reported_moving) ? t.path.front() : t.cell;
-      out.end_state[r] = t.path.empty() ? t.cell : t.path.back();
-      if (t.health == RobotHealth::kOk && !t.dispatched && !t.path.empty() && !holds(r)) ++out.waiting;
-    } else if (out.command[r] == kNoCell) {
-      out.command[r] = t.cell;
-      out.end_state[r] = t.cell;
-    }
+    out.end_state[r] = t.path.empty() ? t.cell : t.path.back();
+    if (t.health == RobotHealth::kOk && !t.dispatched && !t.path.empty() && !holds(r)) ++out.waiting;
   }
   return out;
 }

@@ -165,7 +165,7 @@ class PlannerNode {
   std::map<uint64_t, DeliveryServer::GoalHandle> goal_of_task_;
   uint64_t tick_ = 0, overruns_ = 0, skipped_ = 0, invalid_plans_ = 0, bad_reports_ = 0;
   uint64_t fallback_ticks_ = 0, late_ticks_ = 0, planner_errors_ = 0, store_errors_ = 0;
-  // Issue 13: the execution layer (ADG or lock-step), used by the tick thread only.
+  // Issue 13: the execution layer (the ADG), used by the tick thread only.
   std::string execution_ = "adg";
   int commit_horizon_ = 2;
   double dispatch_rate_ = 20.0;  // Hz: arrivals checked between ticks (adg), 0 = at ticks only
@@ -225,7 +225,7 @@ void PlannerNode::load_parameters() {
   pnh_.param("dist_budget_mb", dist_budget_mb_, 256);
   pnh_.param("plan_deadline", plan_deadline_, 0.0);
   pnh_.param("offline_timeout", offline_timeout_, 2.0);
-  pnh_.param("execution", execution_, std::string("adg"));    // issue 13: adg | lockstep
+  pnh_.param("execution", execution_, std::string("adg"));    // issue 13: adg, the only execution
   pnh_.param("commit_horizon", commit_horizon_, 2);
   pnh_.param("dispatch_rate", dispatch_rate_, 20.0);
   pnh_.param("show_goal_lines", show_goal_lines_, false);
@@ -325,8 +325,10 @@ void PlannerNode::init() {
   }
   fleet_ = std::make_unique<Fleet>(grid, *dist_, num_robots_);
   {  // the per-tick execution layer (issue 13): throws ParamError on a bad ~execution/~commit_horizon
+    if (execution_ != "adg")
+      throw gdrhcr::ParamError("~execution: 'adg' is the only execution (lock-step was removed in issue 22), not '" +
+                               execution_ + "'");
     ExecutorConfig ec;
-    ec.mode = parse_execution_mode(execution_);
     ec.commit_horizon = commit_horizon_;
     ec.plan_deadline_s = plan_deadline_;
     ec.dist_budget_bytes = size_t(dist_budget_mb_) << 20;
@@ -411,7 +413,7 @@ void PlannerNode::start_timers(ros::CallbackQueue* tick_queue) {
   ros::TimerOptions opts(ros::Duration(1.0 / tick_rate_),
                          [this](const ros::TimerEvent& ev) { on_tick(ev); }, tick_queue);
   tick_timer_ = nh_.createTimer(opts);
-  if (dispatch_rate_ > 0 && executor_->config().mode == ExecutionMode::kAdg) {
+  if (dispatch_rate_ > 0) {
     // On the tick thread, so it never runs during a tick (the executor is the tick thread's).
     ros::TimerOptions d(ros::Duration(1.0 / dispatch_rate_),
                         [this](const ros::TimerEvent& ev) { on_dispatch(ev); }, tick_queue);
@@ -613,8 +615,8 @@ void PlannerNode::on_tick(const ros::TimerEvent& ev) {
     std::lock_guard<std::mutex> lock(mutex_);
     in = gather_tick_locked(retired);
   }
-  // Liveness, planning, reservation, commitment and validation: the execution layer (ADG or
-  // lock-step, execution.hpp).
+  // Liveness, planning, reservation, commitment and validation: the execution layer (the ADG,
+  // execution.hpp).
   executor_->set_plan_deadline(plan_deadline_);
   const TickOutput exec = executor_->tick(in.robots, in.goals, *planner_, in.proceed_without_missing, &in.held);
   if (!exec.stepped) {

@@ -1,5 +1,4 @@
-// Executor (execution.hpp): the lock-step reservation fix of issue 13, rotations, and the Action
-// Dependency Graph under random delays: simulated robots that start a commanded move at once
+// Executor (execution.hpp): the Action Dependency Graph, rotations, and the ADG under random delays: simulated robots that start a commanded move at once
 // (no interlock), pause for random delays (LoRR 2026 style: p_delay per tick, 1..D ticks), move
 // at different speeds, and occupy both cells while moving. Over many seeds: no two robots ever
 // share a cell, every command is a wait or a move to a free neighbour, a command to a moving
@@ -59,40 +58,8 @@ std::vector<std::vector<Cell>> stay_goals(const std::vector<RobotRecord>& robots
 
 }  // namespace
 
-// Issue 13, fix 1: robot 0 was commanded into (2,0) and is still moving; the planner, which sees
-// robot 0 at (1,0), sends robot 1 into (2,0). Before the fix only a silent robot's target was
-// reserved and robot 1 got the command; now robot 1 is held.
-TEST(ExecutorLockstep, AMovingRobotsDestinationIsReservedUntilItArrives) {
-  const Grid g = Grid::from_rows({"......"});
-  gdrhcr::DistTable dist(g);
-  FnPlanner* fn;
-  auto planner = make_fn_planner(g, 2, &fn);
-  ExecutorConfig cfg;
-  cfg.mode = ExecutionMode::kLockstep;
-  Executor ex(g, dist, 2, cfg);
-  std::vector<RobotRecord> robots{at(g, 1, 0), at(g, 3, 0)};
-  fn->fn = [&](const gdrhcr::WorldView&, std::vector<Cell>& next) { next[0] = g.cell(2, 0); };
-  auto out = ex.tick(robots, stay_goals(robots), *planner, false);
-  ASSERT_TRUE(out.stepped);
-  EXPECT_EQ(out.command[0], g.cell(2, 0));
-  robots[0].moving = true;  // on its way, still reporting its source cell
-  fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
-    EXPECT_EQ(w.positions[0], g.cell(1, 0));
-    next[1] = g.cell(2, 0);  // valid from the positions the planner sees
-  };
-  out = ex.tick(robots, stay_goals(robots), *planner, false);
-  ASSERT_TRUE(out.stepped);
-  EXPECT_EQ(out.command[1], g.cell(3, 0)) << "robot 1 was sent into the cell robot 0 is entering";
-  EXPECT_EQ(out.command[0], g.cell(1, 0));  // held: it finishes its move, then waits
-  // Arrived: the cell is robot 0's now, and robot 1 may follow once robot 0 moves on.
-  robots[0] = at(g, 2, 0);
-  fn->fn = [&](const gdrhcr::WorldView&, std::vector<Cell>& next) { next[1] = g.cell(2, 0); };
-  out = ex.tick(robots, stay_goals(robots), *planner, false);
-  EXPECT_EQ(out.command[1], g.cell(3, 0));  // (2,0) is occupied by robot 0, which stays
-}
-
-// The same situation in ADG mode: robot 0 is late, so it gets no further move and robot 1 is not
-// sent into the cell it enters; later robot 1 follows robot 0 out of (2,0), and is only sent in
+// Robot 0 was commanded into (2,0) and is still moving at the next tick: it is late, so it gets no
+// further move and robot 1 is not sent into the cell it enters; later robot 1 follows robot 0 out of (2,0), and is only sent in
 // once robot 0 has reported arrival in its next cell, however long that takes.
 TEST(ExecutorAdg, ACellIsEnteredOnlyAfterTheRobotsBeforeHaveLeftIt) {
   const Grid g = Grid::from_rows({"......"});
@@ -158,9 +125,7 @@ TEST(HoldRotations, ACycleOfFollowersWaitsAndAChainDoesNot) {
   EXPECT_EQ(hold_rotations(p2, n2, h2), 2);
 }
 
-TEST(Executor, BadModeAndHorizonAreRejected) {
-  EXPECT_THROW(parse_execution_mode("async"), gdrhcr::ParamError);
-  EXPECT_EQ(parse_execution_mode("lockstep"), ExecutionMode::kLockstep);
+TEST(Executor, BadHorizonIsRejected) {
   const Grid g = Grid::from_rows({"..."});
   gdrhcr::DistTable dist(g);
   ExecutorConfig cfg;
@@ -194,7 +159,7 @@ const Grid& small_warehouse() {
 // Runs `ticks` ticks with delays, then `tail` ticks without.
 SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int ticks, int tail, double p_delay,
                     int max_delay, const std::function<void(int, DelayedFleet&)>& faults = nullptr,
-                    ExecutionMode mode = ExecutionMode::kAdg, int commit_horizon = 1, bool between = false) {
+                    int commit_horizon = 1, bool between = false) {
   const Grid& g = small_warehouse();
   gdrhcr::DistTable dist(g);
   gdrhcr::Params params, none;
@@ -202,7 +167,6 @@ SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int t
   DeadlinePlanner planner(gdrhcr::make_planner(planner_name, params, g, n, seed),
                           gdrhcr::make_planner("pibt", none, g, n, seed));
   ExecutorConfig cfg;
-  cfg.mode = mode;
   cfg.commit_horizon = commit_horizon;
   Executor ex(g, dist, n, cfg);
   DelayedFleet sim(g, n, seed);
@@ -230,11 +194,9 @@ SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int t
     if (std::getenv("EXEC_DEBUG"))
       for (auto& w : out.warnings) fprintf(stderr, "seed %lu t=%d %s\n", (unsigned long)seed, t, w.c_str());
     EXPECT_EQ(out.plan_error, "") << "seed " << seed << " tick " << t;
-    if (mode == ExecutionMode::kAdg) {
-      const std::string inv = ex.check_invariants();
-      EXPECT_EQ(inv, "") << "seed " << seed << " tick " << t;
-      if (!inv.empty()) return res;
-    }
+    const std::string inv = ex.check_invariants();
+    EXPECT_EQ(inv, "") << "seed " << seed << " tick " << t;
+    if (!inv.empty()) return res;
     std::vector<int> before(n);
     for (int i = 0; i < n; ++i) before[i] = sim.robots()[i].moves;
     const std::string bad = sim.execute(out, t < ticks ? p_delay : 0.0, max_delay, between ? on_arrival : nullptr);
@@ -248,8 +210,7 @@ SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int t
       ++res.health_ticks[i][static_cast<int>(out.health[i])];
       const int moved = sim.robots()[i].moves - before[i];
       if (t >= ticks) res.moves_tail[i] += moved;
-      const bool waits = mode == ExecutionMode::kAdg && out.health[i] == RobotHealth::kOk && !ex.committed(i).empty() &&
-                         !ex.dispatched(i);
+      const bool waits = out.health[i] == RobotHealth::kOk && !ex.committed(i).empty() && !ex.dispatched(i);
       wait_run[i] = waits ? wait_run[i] + 1 : 0;
       if (getenv("EXEC_DEBUG") && wait_run[i] == 25) {
         const Cell c = ex.committed(i)[0];
@@ -300,7 +261,7 @@ TEST(ExecutorAdg, RandomDelaysNeverCollideNorDeadlock_DispatchOnArrival) {
   for (uint64_t seed = 1; seed <= seeds(20); ++seed) {
     for (const char* planner : {"pibt", "gd-rhcr"}) {
       if (std::string(planner) == "gd-rhcr" && seed > 6) continue;
-      const SimResult r = run_fleet(planner, 30, seed, 150, 60, 0.05, 20, nullptr, ExecutionMode::kAdg, 2, true);
+      const SimResult r = run_fleet(planner, 30, seed, 150, 60, 0.05, 20, nullptr, 2, true);
       if (HasFailure()) return;
       EXPECT_GT(r.goals_tail, 0) << planner << " seed " << seed;
       EXPECT_LE(r.max_wait_tail, 30) << planner << " seed " << seed;

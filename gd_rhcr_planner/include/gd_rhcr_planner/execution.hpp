@@ -1,23 +1,20 @@
 // The per-tick execution layer of the planner node, ROS-free: robot liveness and consistency,
 // planning, reservation, commitment and validation. Unit-tested in test/execution_test.cpp.
 //
-// Two modes:
-// * "adg" (default): an Action Dependency Graph as in Hönig, Kiesel, Tinka, Durham and Ayanian,
-//   "Persistent and Robust Execution of MAPF Schedules in Warehouses" (RA-L 2019), over a rolling
-//   horizon. Every tick the planner (GD-RHCR, its lazy group replans included) plans one more
-//   synchronous step from the robots' *committed end states*; the step is committed: each robot's
-//   new cell is appended to its committed path and to the cell's queue of visits, in plan order.
-//   A robot is commanded its next committed cell (the move is "dispatched") as soon as every robot
-//   that the plan sends through that cell earlier has left it (reported arrival in its next cell);
-//   no lock-step: advance() does this between ticks too, as the arrival reports come in. A dispatched cell stays reserved for the robot until it reports arrival, and a
-//   commitment is never changed by a replan, so any pattern of delays gives no collision, and,
-//   since commitments follow one global plan order with cycles (rotations) turned into waits, no
-//   deadlock. Moves not dispatched yet may still be taken back: those queued behind a late robot
-//   are (revoke_behind_late). A robot with `commit_horizon` moves committed and not finished (the one it is
-//   making included) is immovable for the planner in that step (the others plan around it).
-// * "lockstep" (the node's behaviour before issue 13, kept for comparison): every tick the planner
-//   plans from the reported cells; a robot still moving is held, the cell it is entering is
-//   reserved (issue 13's fix), and robots that would enter a held robot's cell are held too.
+// An Action Dependency Graph as in Hönig, Kiesel, Tinka, Durham and Ayanian, "Persistent and
+// Robust Execution of MAPF Schedules in Warehouses" (RA-L 2019), over a rolling horizon. Every
+// tick the planner (GD-RHCR, its lazy group replans included) plans one more synchronous step
+// from the robots' *committed end states*; the step is committed: each robot's new cell is
+// appended to its committed path and to the cell's queue of visits, in plan order. A robot is
+// commanded its next committed cell (the move is "dispatched") as soon as every robot that the
+// plan sends through that cell earlier has left it (reported arrival in its next cell); robots do
+// not move in lock-step: advance() does this between ticks too, as the arrival reports come in.
+// A dispatched cell stays reserved for the robot until it reports arrival, and a commitment is
+// never changed by a replan, so any pattern of delays gives no collision, and, since commitments
+// follow one global plan order with cycles (rotations) turned into waits, no deadlock. Moves not
+// dispatched yet may still be taken back: those queued behind a late robot are
+// (revoke_behind_late). A robot with `commit_horizon` moves committed and not finished (the one
+// it is making included) is immovable for the planner in that step (the others plan around it).
 //
 // Bad robots do not stop the fleet: a robot that never reported (missing) is left out once the
 // caller allows it; a robot that is offline, silent, or inconsistent (a report of a cell another
@@ -41,20 +38,14 @@
 
 namespace gd_rhcr_planner {
 
-enum class ExecutionMode { kAdg, kLockstep };
-// "adg" or "lockstep"; throws gdrhcr::ParamError naming the value otherwise.
-ExecutionMode parse_execution_mode(const std::string& name);
-const char* execution_mode_name(ExecutionMode m);
-
 enum class RobotHealth : uint8_t { kOk, kMissing, kOffline, kSilent, kInconsistent };
 const char* robot_health_name(RobotHealth h);
 
 struct ExecutorConfig {
-  ExecutionMode mode = ExecutionMode::kAdg;
-  int commit_horizon = 1;       // ADG: moves a robot may have committed and not finished, the one it makes included (>= 1)
+  int commit_horizon = 1;       // moves a robot may have committed and not finished, the one it makes included (>= 1)
   double plan_deadline_s = 0;   // per planner call (DeadlinePlanner); <= 0 waits for the planner
   size_t dist_budget_bytes = size_t(256) << 20;  // distance table around bad robots
-  // ADG: a late robot's undispatched moves and those of the robots waiting to enter its cell are
+  // A late robot's undispatched moves and those of the robots waiting to enter its cell are
   // taken back (transitively) and planned again around it, instead of queueing behind it.
   bool revoke_behind_late = true;
 };
@@ -64,17 +55,17 @@ struct TickOutput {
   std::string skip_reason;
   std::vector<Cell> cells;       // per robot id: its cell as the executor knows it (kNoCell: missing)
   std::vector<Cell> command;     // per robot id: the cell to be in or head for (kNoCell: no command)
-  std::vector<Cell> end_state;   // per robot id: the end of its commitments (lockstep: its next cell)
+  std::vector<Cell> end_state;   // per robot id: the end of its commitments
   std::vector<RobotHealth> health;
   std::vector<int> robot_of_agent;  // planner agent index -> robot id (the planner sees active robots)
   std::vector<std::vector<Cell>> agent_goals;  // the goals the planner got, per agent
   bool planner_called = false;
   DeadlineOutcome outcome;       // of the planner call
   int held = 0;                  // planned moves turned into waits (immovable robots and robots behind them)
-  int waiting = 0;               // ADG: robots whose next committed move waits for robots ahead of them
-  int dispatched = 0;            // ADG: moves commanded for the first time this tick
-  int resyncs = 0;               // ADG: commitments rebuilt this tick (a robot changed health, slipped)
-  int revoked = 0;               // ADG: robots whose undispatched moves were taken back (revoke_behind_late)
+  int waiting = 0;               // robots whose next committed move waits for robots ahead of them
+  int dispatched = 0;            // moves commanded for the first time this tick
+  int resyncs = 0;               // commitments rebuilt this tick (a robot changed health, slipped)
+  int revoked = 0;               // robots whose undispatched moves were taken back (revoke_behind_late)
   std::string plan_error;        // the planned step was rejected by the validator: nobody got a new move
   std::vector<std::string> warnings;  // robots that changed health, unexpected reports
 };
@@ -93,13 +84,13 @@ class Executor {
                   DeadlinePlanner& planner, bool proceed_without_missing,
                   const std::vector<uint8_t>* hold = nullptr);
 
-  // ADG, between ticks: takes the robots' arrival reports (a robot at rest in the cell it was
+  // Between ticks: takes the robots' arrival reports (a robot at rest in the cell it was
   // commanded into) and dispatches the moves that this makes ready, at once rather than at the
   // next tick (a robot behind another enters its cell as soon as it has left). Any other report
   // (a slip, a change of health) waits for the next tick. Returns the robots given a new move;
-  // command(r) is the cell to send each. Lock-step: does nothing.
+  // command(r) is the cell to send each.
   std::vector<int> advance(const std::vector<RobotRecord>& robots, const std::vector<uint8_t>* hold = nullptr);
-  // ADG: the cell robot r is commanded now (its dispatched cell, else its own cell).
+  // The cell robot r is commanded now (its dispatched cell, else its own cell).
   Cell command(int r) const;
 
   const ExecutorConfig& config() const { return cfg_; }
@@ -113,7 +104,7 @@ class Executor {
   RobotHealth health(int r) const { return tracks_[r].health; }
   uint64_t steps() const { return steps_; }            // planned steps so far
   uint64_t resyncs_total() const { return resyncs_total_; }
-  // ADG invariant check (tests): every robot's visits are queued in its path order and each
+  // Invariant check (tests): every robot's visits are queued in its path order and each
   // cell's queue starts with the robot in it, if any. Empty when fine, else what is wrong.
   std::string check_invariants() const;
   // The robots queued to visit cell c, with their state (debugging, tests).
@@ -129,12 +120,10 @@ class Executor {
     uint64_t dispatched_at = 0; // the tick (counted by tick()) of that command
     Cell claimed = gdrhcr::kNoCell;  // inconsistent: the cell it reported (blocked)
     bool unknown_move = false;  // reported moving with no move commanded: its neighbours are blocked
-    Cell last_target = gdrhcr::kNoCell;  // lockstep: target of its last move command, until it arrives
     bool reported_moving = false;  // its last report said it is between two cells
   };
 
-  void reconcile_adg(const std::vector<RobotRecord>& robots, TickOutput& out);
-  void reconcile_lockstep(const std::vector<RobotRecord>& robots, TickOutput& out);
+  void reconcile(const std::vector<RobotRecord>& robots, TickOutput& out);
   void resync();
   void arrive(int r);
   int revoke(int r);
@@ -152,7 +141,7 @@ class Executor {
   const gdrhcr::DistTable& dist_;
   ExecutorConfig cfg_;
   std::vector<Track> tracks_;
-  std::unordered_map<Cell, std::deque<int>> visits_;  // ADG: robots that will be in a cell, in plan order
+  std::unordered_map<Cell, std::deque<int>> visits_;  // robots that will be in a cell, in plan order
   gdrhcr::StepValidator validator_;
   std::vector<Cell> obstacle_cells_;  // the cells the current obstacle table blocks
   std::shared_ptr<const gdrhcr::DistTable> obstacle_dist_;
