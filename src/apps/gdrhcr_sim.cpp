@@ -32,6 +32,9 @@ const char* kUsage =
     "                      the map if present, else the rule in the README)\n"
     "  --deliveries FILE   MAPD delivery cells, 'x y' per line (default: the map's rule)\n"
     "  --planner NAME      planner: %s (default pibt)\n"
+    "  --action-model M    mapf (wait or move to a 4-neighbour; default) or rotation (LoRR's\n"
+    "                      MAPF_T: heading E/S/W/N, forward, rotate either way or wait; all\n"
+    "                      agents start facing east); the result records action_model\n"
     "  --agents N          number of agents (default 100)\n"
     "  --steps N           timesteps to simulate (default 500)\n"
     "  --seed N            seed for starts, tasks and planner tie-breaks (default 0)\n"
@@ -118,8 +121,17 @@ struct RunOptions {
   int agents = 100, steps = 500, lookahead = 3, budget_mb = 256;
   uint64_t seed = 0;
   bool distinct_goals = false;
+  ActionModel action_model = ActionModel::kMapf;
   std::unique_ptr<LorrProblem> lorr;
 };
+
+ActionModel read_action_model(Params& args) {
+  try {
+    return parse_action_model(args.get_string("action-model", "mapf"));
+  } catch (const std::invalid_argument& e) {
+    throw ParamError(std::string("--action-model: ") + e.what());
+  }
+}
 
 RunOptions read_options(Params& args) {
   RunOptions o;
@@ -136,6 +148,7 @@ RunOptions read_options(Params& args) {
   o.pickups_file = args.get_string("pickups", "");
   o.deliveries_file = args.get_string("deliveries", "");
   o.planner = args.get_string("planner", "pibt");
+  o.action_model = read_action_model(args);
   o.agents = o.lorr ? o.lorr->team_size : args.get_int("agents", 100, 1, 10000000);
   o.steps = args.get_int("steps", 500, 1, 100000000);
   o.seed = args.get_u64("seed", 0);
@@ -193,6 +206,7 @@ nlohmann::json result_json(const RunOptions& o, const SimResult& r, const Planne
   params["seed"] = o.seed;
   params["tasks"] = o.task_kind;
   params["lookahead"] = o.lookahead;
+  params["action_model"] = action_model_name(o.action_model);
   params["dist_budget_mb"] = o.budget_mb;
   j["params"] = params;
   for (auto& v : values.values()) j["param_sources"][v.spec->name] = v.source;
@@ -225,17 +239,18 @@ int run(Params& args, const Flags& flags) {
                 values.preset().c_str(), values.format().c_str());
     return 0;
   }
-  DistTable dist(grid, size_t(o.budget_mb) << 20);
+  DistTable dist(grid, o.action_model, size_t(o.budget_mb) << 20);
   nlohmann::json task_info;
   TaskListStream* task_list = nullptr;
   std::unique_ptr<TaskStream> tasks = make_tasks(o, grid, task_info, task_list);
   const std::vector<Cell> starts = o.lorr ? o.lorr->starts : random_starts(grid, o.agents, o.seed);
-  auto planner = make_planner(values, grid, o.agents, o.seed);
+  auto planner = make_planner(values, grid, o.agents, o.seed, o.action_model);
 
   SimOptions opt;
   opt.steps = o.steps;
   opt.lookahead = o.lookahead;
   opt.record_paths = !o.paths_path.empty() || !o.lorr_out.empty();
+  opt.action_model = o.action_model;
   RecordingTaskStream recorded(*tasks);
   const SimResult r = run_simulation(grid, dist, recorded, *planner, starts, opt);
 
@@ -249,9 +264,9 @@ int run(Params& args, const Flags& flags) {
   write_text(o.out_path, result_json(o, r, *planner, values, task_info, dist).dump(2) + "\n");
   if (!flags.quiet)
     std::fprintf(stderr,
-                 "%s on %s, %d agents, %d steps: throughput %.3f (free flow %.3f), %ld goals, "
+                 "%s (%s model) on %s, %d agents, %d steps: throughput %.3f (free flow %.3f), %ld goals, "
                  "0 collisions, plan time mean %.6f s max %.6f s, wall %.2f s\n",
-                 planner->name().c_str(), o.map_path.c_str(), o.agents, o.steps, r.throughput, r.free_flow_throughput,
+                 planner->name().c_str(), action_model_name(o.action_model), o.map_path.c_str(), o.agents, o.steps, r.throughput, r.free_flow_throughput,
                  r.goals_reached, r.plan_time_mean_s, r.plan_time_max_s, r.wall_time_s);
   return 0;
 }

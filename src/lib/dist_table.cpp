@@ -16,7 +16,8 @@ constexpr size_t kEntryOverhead = sizeof(std::atomic<uint64_t>) + sizeof(std::sh
                                   sizeof(Cell) + 2 * sizeof(void*);
 }  // namespace
 
-FreeCellIndex::FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked_cells) {
+FreeCellIndex::FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked_cells, ActionModel m)
+    : model(m) {
   const auto& free = grid.free_cells();
   num_free = static_cast<int32_t>(free.size());
   cell_of = free;
@@ -35,11 +36,20 @@ FreeCellIndex::FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked_
     for (Cell c : blocked_cells)
       if (grid.is_free(c)) blocked[slot_of[c]] = 1;
   }
+  if (model == ActionModel::kRotation) {
+    faced.resize(size_t(num_free) * kNumHeadings);
+    for (int32_t s = 0; s < num_free; ++s)
+      for (Heading h = 0; h < kNumHeadings; ++h) {
+        const Cell n = forward_cell(grid, free[s], h);
+        faced[size_t(s) * kNumHeadings + h] = n == kNoCell ? num_free : slot_of[n];
+      }
+  }
 }
 
 size_t FreeCellIndex::bytes() const {
   return sizeof(*this) + slot_of.capacity() * sizeof(int32_t) + cell_of.capacity() * sizeof(Cell) +
-         adj_begin.capacity() * sizeof(int32_t) + adj.capacity() * sizeof(int32_t) + blocked.capacity();
+         adj_begin.capacity() * sizeof(int32_t) + adj.capacity() * sizeof(int32_t) + blocked.capacity() +
+         faced.capacity() * sizeof(int32_t);
 }
 
 namespace {
@@ -87,6 +97,7 @@ void DistRow::bfs() {
   const FreeCellIndex& ix = *index_;
   const int32_t goal_slot = ix.slot_of.at(goal_);
   if (goal_slot >= ix.num_free) throw std::out_of_range("distance row: goal is not a free cell");
+  if (ix.model == ActionModel::kRotation) return bfs_rotation(goal_slot);
   thread_local std::vector<int32_t> queue;
   if (narrow_) {
     d16_.assign(size_t(ix.num_free) + 1, 0xFFFF);
@@ -97,8 +108,50 @@ void DistRow::bfs() {
   }
 }
 
+// Reverse BFS over states s * 4 + h from the goal's four headings. The predecessors of (s, h)
+// are (s, h rotated either way), one rotation away, and the state behind s facing h, one forward
+// move away. Blocked slots are never entered. Then per slot: the least distance and the excess
+// of each heading over it.
+void DistRow::bfs_rotation(int32_t goal_slot) {
+  const FreeCellIndex& ix = *index_;
+  const int32_t f = ix.num_free;
+  thread_local std::vector<uint32_t> d;
+  thread_local std::vector<int32_t> queue;
+  d.assign(size_t(f) * kNumHeadings, UINT32_MAX);
+  queue.resize(size_t(f) * kNumHeadings);
+  const int32_t* faced = ix.faced.data();
+  const uint8_t* blocked = ix.blocked.empty() ? nullptr : ix.blocked.data();
+  size_t head = 0, tail = 0;
+  for (int h = 0; h < kNumHeadings; ++h) d[goal_slot * 4 + h] = 0, queue[tail++] = goal_slot * 4 + h;
+  auto visit = [&](int32_t st, uint32_t nd) {
+    if (d[st] == UINT32_MAX) d[st] = nd, queue[tail++] = st;
+  };
+  while (head < tail) {
+    const int32_t st = queue[head++], s = st >> 2, h = st & 3;
+    const uint32_t nd = d[st] + 1;
+    visit(s * 4 + ((h + 1) & 3), nd);
+    visit(s * 4 + ((h + 3) & 3), nd);
+    const int32_t behind = faced[size_t(s) * 4 + ((h + 2) & 3)];
+    if (behind < f && !(blocked && blocked[behind])) visit(behind * 4 + h, nd);
+  }
+  if (narrow_) d16_.assign(size_t(f) + 1, 0xFFFF);
+  else d32_.assign(size_t(f) + 1, UINT32_MAX);
+  excess_.assign(size_t(f) + 1, 0);
+  for (int32_t s = 0; s < f; ++s) {
+    const uint32_t* ds = &d[size_t(s) * 4];
+    const uint32_t least = std::min(std::min(ds[0], ds[1]), std::min(ds[2], ds[3]));
+    if (least == UINT32_MAX) continue;
+    if (narrow_) d16_[s] = static_cast<uint16_t>(least);
+    else d32_[s] = least;
+    uint8_t bits = 0;
+    for (int h = 0; h < kNumHeadings; ++h) bits |= static_cast<uint8_t>((ds[h] - least) << (2 * h));
+    excess_[s] = bits;
+  }
+}
+
 size_t DistRow::bytes() const {
-  return sizeof(DistRow) + d16_.capacity() * sizeof(uint16_t) + d32_.capacity() * sizeof(uint32_t);
+  return sizeof(DistRow) + d16_.capacity() * sizeof(uint16_t) + d32_.capacity() * sizeof(uint32_t) +
+         excess_.capacity();
 }
 
 DistTable::DistTable(const Grid& grid, size_t budget_bytes)
@@ -109,13 +162,20 @@ std::atomic<uint64_t> next_table_id{1};
 }  // namespace
 
 DistTable::DistTable(const Grid& grid, const std::vector<Cell>& blocked, size_t budget_bytes)
+    : DistTable(grid, blocked, ActionModel::kMapf, budget_bytes) {}
+
+DistTable::DistTable(const Grid& grid, ActionModel model, size_t budget_bytes)
+    : DistTable(grid, std::vector<Cell>{}, model, budget_bytes) {}
+
+DistTable::DistTable(const Grid& grid, const std::vector<Cell>& blocked, ActionModel model, size_t budget_bytes)
     : grid_(grid),
-      index_(std::make_shared<const FreeCellIndex>(grid, blocked)),
+      index_(std::make_shared<const FreeCellIndex>(grid, blocked, model)),
       id_(next_table_id++),
       budget_(budget_bytes) {}
 
 size_t DistTable::row_bytes() const {
-  return sizeof(DistRow) + (size_t(index_->num_free) + 1) * (index_->wide() ? 4 : 2) + kEntryOverhead;
+  const size_t excess = index_->model == ActionModel::kRotation ? 1 : 0;
+  return sizeof(DistRow) + (size_t(index_->num_free) + 1) * ((index_->wide() ? 4 : 2) + excess) + kEntryOverhead;
 }
 
 void DistTable::check_goal(Cell goal) const {

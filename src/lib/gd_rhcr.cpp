@@ -124,6 +124,7 @@ GdRhcrPlanner::~GdRhcrPlanner() = default;
 
 // Algorithm 1, one timestep.
 StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& next) {
+  check_action_model(name(), ActionModel::kMapf, world);
   StepWork work;
   begin_step(world);
   assign_groups(world, work);        // groups, and which solver moves each (lines 3-10, 19)

@@ -51,6 +51,7 @@ std::vector<Cell> PibtPlanner::planned_path(int agent) const {
 }
 
 StepReport PibtPlanner::plan_step(const WorldView& world, std::vector<Cell>& next) {
+  check_action_model(name(), ActionModel::kMapf, world);
   const auto t0 = std::chrono::steady_clock::now();
   now_ = world.timestep;
   if (guidance_) {

@@ -103,18 +103,37 @@ std::vector<std::string> planner_names() {
   return names;
 }
 
+bool planner_supports(const std::string& name, ActionModel model) {
+  (void)name;
+  return model == ActionModel::kMapf;
+}
+
+void check_action_model(const std::string& planner, ActionModel built, const WorldView& world) {
+  if (world.action_model != built)
+    throw std::invalid_argument("planner " + planner + " was built for the " + action_model_name(built) +
+                                " action model but asked to plan in the " + action_model_name(world.action_model) +
+                                " model");
+  if (world.rotation() && (!world.headings || !world.next_headings))
+    throw std::invalid_argument("planner " + planner + ": the rotation model needs headings and next_headings");
+}
+
 std::unique_ptr<Planner> make_planner(const PlannerParams& values, const Grid& grid, int num_agents,
-                                      uint64_t seed) {
-  for (auto& [name, factory] : registry())
-    if (name == values.planner()) return factory(values, grid, num_agents, seed);
+                                      uint64_t seed, ActionModel model) {
+  for (auto& [name, factory] : registry()) {
+    if (name != values.planner()) continue;
+    if (!planner_supports(name, model))
+      throw ParamError("planner '" + name + "' does not plan in the " + action_model_name(model) +
+                       " action model (yet); use --action-model mapf or another planner");
+    return factory(values, grid, num_agents, seed);
+  }
   throw ParamError("unknown planner '" + values.planner() + "'");
 }
 
 std::unique_ptr<Planner> make_planner(const std::string& name, Params& params, const Grid& grid,
-                                      int num_agents, uint64_t seed) {
+                                      int num_agents, uint64_t seed, ActionModel model) {
   const PlannerParams values = PlannerParams::resolve(name, params, MapFacts(grid, num_agents));
   params.check_all_used("planner " + name);
-  return make_planner(values, grid, num_agents, seed);
+  return make_planner(values, grid, num_agents, seed, model);
 }
 
 }  // namespace gdrhcr

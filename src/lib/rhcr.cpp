@@ -31,6 +31,7 @@ bool RhcrPlanner::on_plan(const WorldView& world) const {
 }
 
 StepReport RhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& next) {
+  check_action_model(name(), ActionModel::kMapf, world);
   const int n = world.num_agents();
   StepReport report;
   now_ = world.timestep;

@@ -21,7 +21,8 @@ static double process_cpu_s() {
 }
 
 nlohmann::json SimResult::to_json() const {
-  return {{"steps", steps},
+  return {{"action_model", action_model_name(action_model)},
+          {"steps", steps},
           {"agents", agents},
           {"goals_reached", goals_reached},
           {"throughput", throughput},
@@ -52,11 +53,13 @@ class Run {
   Run(const Grid& grid, const DistTable& dist, TaskStream& tasks, Planner& planner,
       const std::vector<Cell>& starts, const SimOptions& options)
       : grid_(grid), dist_(dist), tasks_(tasks), planner_(planner), opt_(options), n_(static_cast<int>(starts.size())),
-        pos_(starts), next_(n_, kNoCell), from_(starts), goals_(n_), validator_(grid),
+        pos_(starts), next_(n_, kNoCell), from_(starts), goals_(n_), validator_(grid, options.action_model),
         got_at_(n_, 0), still_(n_, 0), dist0_(n_), late_(n_, 0), ever_late_(n_, 0) {
     r_.steps = options.steps;
     r_.agents = n_;
-    validator_.require_valid(pos_, pos_, -1);  // the start itself: free, distinct cells
+    r_.action_model = options.action_model;
+    init_headings();
+    validator_.require_valid(pos_, pos_, -1, heads(), heads());  // the start: free, distinct cells
     const int lookahead = std::max(1, options.lookahead);
     for (int i = 0; i < n_; ++i) {
       Cell last = pos_[i];
@@ -66,6 +69,8 @@ class Run {
     if (opt_.record_paths) {
       r_.paths.assign(n_, {});
       for (int i = 0; i < n_; ++i) r_.paths[i].reserve(opt_.steps + 1), r_.paths[i].push_back(pos_[i]);
+      if (rotation()) r_.headings.assign(n_, {});
+      for (int i = 0; rotation() && i < n_; ++i) r_.headings[i].push_back(head_[i]);
     }
   }
 
@@ -79,18 +84,44 @@ class Run {
     r_.step_wall_mean_s = opt_.steps > 0 ? wall_sum_ / opt_.steps : 0;
     r_.step_cpu_mean_s = opt_.steps > 0 ? cpu_sum_ / opt_.steps : 0;
     for (int i = 0; i < n_; ++i) r_.late_at_end += late_[i];
-    r_.free_flow_throughput = free_flow_throughput(grid_, dist_, tasks_, starts, opt_.steps);
+    r_.free_flow_throughput = free_flow_throughput(grid_, dist_, tasks_, starts, opt_.steps, &start_head_);
     r_.wall_time_s = seconds_since(t_start);
     return std::move(r_);
   }
 
  private:
-  int shortest(int i) const { return std::max(1, std::min(dist_.get(goals_[i].front(), pos_[i]), kUnreachable)); }
+  bool rotation() const { return opt_.action_model == ActionModel::kRotation; }
+  const std::vector<Heading>* heads() const { return rotation() ? &head_ : nullptr; }
+  int shortest(int i) const {
+    const int d = rotation() ? dist_.get(goals_[i].front(), pos_[i], head_[i]) : dist_.get(goals_[i].front(), pos_[i]);
+    return std::max(1, std::min(d, kUnreachable));
+  }
+
+  // Rotation: the start headings (default east), checked against the fleet and the DistTable.
+  void init_headings() {
+    if (dist_.action_model() != opt_.action_model)
+      throw std::invalid_argument(std::string("simulation in the ") + action_model_name(opt_.action_model) +
+                                  " action model needs a distance table built in it, got " +
+                                  action_model_name(dist_.action_model()));
+    if (!rotation()) return;
+    start_head_ = opt_.start_headings.empty() ? std::vector<Heading>(n_, kEast) : opt_.start_headings;
+    if (static_cast<int>(start_head_.size()) != n_)
+      throw std::invalid_argument("start headings: " + std::to_string(start_head_.size()) + " for " +
+                                  std::to_string(n_) + " agents");
+    head_ = start_head_;
+    next_head_.assign(n_, kNoHeading);
+  }
 
   // The planner's step, timed and validated (a collision throws CollisionError).
   void plan(int t) {
     std::fill(next_.begin(), next_.end(), kNoCell);
+    std::fill(next_head_.begin(), next_head_.end(), kNoHeading);
     WorldView view{grid_, dist_, t, pos_, goals_};
+    if (rotation()) {
+      view.action_model = ActionModel::kRotation;
+      view.headings = &head_;
+      view.next_headings = &next_head_;
+    }
     const auto t0 = Clock::now();
     const double c0 = process_cpu_s();
     const StepReport rep = planner_.plan_step(view, next_);
@@ -103,7 +134,7 @@ class Run {
       plan_sum_ += rep.plan_time_s;
       r_.plan_time_max_s = std::max(r_.plan_time_max_s, rep.plan_time_s);
     }
-    validator_.require_valid(pos_, next_, t);
+    validator_.require_valid(pos_, next_, t, heads(), rotation() ? &next_head_ : nullptr);
   }
 
   // Executes the step: agents on their goal get the next one. A goal equal to the cell it was
@@ -115,6 +146,7 @@ class Run {
       r_.longest_wait = std::max(r_.longest_wait, still_[i]);
     }
     pos_.swap(next_);
+    head_.swap(next_head_);
     for (int i = 0; i < n_; ++i) {
       check_late(i, t + 1);
       if (pos_[i] != goals_[i].front()) continue;
@@ -128,6 +160,8 @@ class Run {
     }
     if (opt_.record_paths)
       for (int i = 0; i < n_; ++i) r_.paths[i].push_back(pos_[i]);
+    if (opt_.record_paths && rotation())
+      for (int i = 0; i < n_; ++i) r_.headings[i].push_back(head_[i]);
   }
 
   // A goal is late once its agent has spent more than twice its shortest distance on it.
@@ -149,6 +183,7 @@ class Run {
   const int n_;
   SimResult r_;
   std::vector<Cell> pos_, next_;
+  std::vector<Heading> head_, next_head_, start_head_;  // rotation only
   std::vector<Cell> from_;  // the cell each agent's current goal was drawn from
   std::vector<std::vector<Cell>> goals_;
   StepValidator validator_;
@@ -168,20 +203,40 @@ SimResult run_simulation(const Grid& grid, const DistTable& dist, TaskStream& ta
   return Run(grid, dist, tasks, planner, starts, options).run(starts, t_start);
 }
 
+namespace {
+// Rotation: walks `p` along a shortest path over (cell, heading) states to row's goal (forward
+// first among equally short actions) and returns its length.
+int walk_to_goal(const Grid& grid, const DistRow& row, Pose& p) {
+  int steps = 0;
+  for (int d = row.at(p.cell, p.heading); d > 0; --d, ++steps) {
+    for (Action a : {Action::kForward, Action::kClockwise, Action::kCounterClockwise}) {
+      const Pose q = apply_action(grid, p, a);
+      if (q.cell != kNoCell && row.at(q.cell, q.heading) == d - 1) {
+        p = q;
+        break;
+      }
+    }
+  }
+  return steps;
+}
+}  // namespace
+
 double free_flow_throughput(const Grid& grid, const DistTable& dist, const TaskStream& tasks,
-                            const std::vector<Cell>& starts, int steps) {
-  (void)grid;
+                            const std::vector<Cell>& starts, int steps, const std::vector<Heading>* start_headings) {
   if (steps <= 0) return 0;
+  const bool rotation = dist.action_model() == ActionModel::kRotation;
   auto replay = tasks.clone_fresh();
   long reached = 0;
   for (int i = 0; i < static_cast<int>(starts.size()); ++i) {
     Cell cur = starts[i];
+    Pose pose{cur, start_headings && !start_headings->empty() ? (*start_headings)[i] : kEast};
     long t = 0;
     for (;;) {
       const Cell g = replay->next_goal(i, cur);
       if (g == cur) break;  // no other cell reachable: no task to count
-      const int d = dist.get(g, cur);
+      int d = dist.get(g, cur);
       if (d >= kUnreachable) break;  // unreachable goal: the agent never gets there
+      if (rotation) d = walk_to_goal(grid, *dist.row(g), pose);
       t += std::max(d, 1);
       if (t > steps) break;
       ++reached;

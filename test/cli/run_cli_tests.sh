@@ -180,5 +180,29 @@ assert len(src) >= 30 and all(k.replace("-", "_") in p for k in src), sorted(src
 PY
 then ok "result JSON records every parameter and its source"; else bad "result JSON params/param_sources"; fi
 
+# Action models (issue 23): a bad model is named; the result records the model in force; a
+# planner that does not plan with turns refuses the rotation model by name.
+expect_error "bad action model" "action-model.*'turning'" --map "$m" --action-model turning
+"$sim" --map "$m" --agents 20 --steps 10 --quiet --out "$tmp/mapf.json"
+if grep -q '"action_model": "mapf"' "$tmp/mapf.json"; then ok "mapf is the default action model and is recorded"; else bad "action_model not recorded as mapf"; fi
+for p in pibt rhcr gd-rhcr; do
+  out=$("$sim" --map "$m" --planner "$p" --agents 20 --steps 30 --seed 2 --action-model rotation --quiet --out "$tmp/rot.json" 2>&1)
+  code=$?
+  if [ "$code" -eq 0 ]; then
+    if /usr/bin/python3 - "$tmp/rot.json" "$p" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert r["action_model"] == "rotation" and r["params"]["action_model"] == "rotation", r["action_model"]
+assert r["planner"] == sys.argv[2] and r["collisions"] == 0 and r["goals_reached"] > 0, r
+assert r["throughput"] <= r["free_flow_throughput"], r
+PY
+    then ok "$p plans in the rotation model"; else bad "$p rotation run JSON"; fi
+  elif [ "$code" -eq 2 ] && grep -qE "planner '$p' does not plan in the rotation" <<<"$out"; then
+    ok "$p refuses the rotation model by name"
+  else
+    bad "$p --action-model rotation (exit $code: $out)"
+  fi
+done
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

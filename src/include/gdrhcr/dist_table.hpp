@@ -19,6 +19,14 @@
 // Batch warm-up: prefetch(goals) computes the missing rows of a set of goals in parallel on
 // oneTBB's pool (one BFS per task); rows(goals) does the same and returns the handles.
 //
+// Turns (issue 23): in the rotation action model (action_model.hpp) a row holds the distance to
+// the goal from every (cell, heading) state, counting quarter turns as steps: a reverse BFS over
+// 4 states per free cell from the goal's four headings (any heading reaches a goal). The row
+// stays compact: per free cell the least distance over its headings, as in a plain row, plus one
+// byte holding, per heading, its excess over that least distance in 2 bits (a turn costs at most
+// 2 steps, so the excess is 0, 1 or 2). row[c] reads the least distance over c's headings,
+// row.at(c, h) the distance from heading h; in the mapf model both read the cell distance.
+//
 // Thread-safe: parallel groups query it at once. Two threads asking for the same missing row at
 // the same moment may both run its BFS (counted); one copy is kept.
 #pragma once
@@ -31,6 +39,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "gdrhcr/action_model.hpp"
 #include "gdrhcr/grid.hpp"
 
 namespace gdrhcr {
@@ -41,14 +50,22 @@ constexpr int kUnreachable = INT32_MAX / 4;
 // in slot space, and the cell -> slot map (obstacles -> F). Built once per DistTable and shared
 // by its rows, so a row outliving its table stays readable.
 struct FreeCellIndex {
-  explicit FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked = {});
+  explicit FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked = {},
+                         ActionModel model = ActionModel::kMapf);
+  ActionModel model = ActionModel::kMapf;
   int32_t num_free = 0;
   std::vector<int32_t> slot_of;       // per grid cell; num_free for obstacles
   std::vector<Cell> cell_of;          // per slot
   std::vector<int32_t> adj_begin;     // CSR over slots: neighbours of s are
   std::vector<int32_t> adj;           //   adj[adj_begin[s] .. adj_begin[s+1])
   std::vector<uint8_t> blocked;       // per slot; empty when nothing is blocked
-  bool wide() const { return num_free > kMaxNarrowFree; }
+  std::vector<int32_t> faced;         // rotation: 4 per slot, the slot heading h faces, or num_free
+  // A shortest path over (cell, heading) states makes at most F - 1 moves, at most one turn
+  // between two moves and two before the first, so its length is below 2F: rotation rows are
+  // 16 bits up to half as many free cells.
+  bool wide() const {
+    return model == ActionModel::kRotation ? num_free > kMaxNarrowFree / 2 : num_free > kMaxNarrowFree;
+  }
   size_t bytes() const;
   // 16-bit rows hold distances 0..65,534 and 0xFFFF as the sentinel; a component of F free
   // cells has distances up to F - 1, so F <= 65,535 fits. We keep one spare: F <= 65,534.
@@ -64,6 +81,7 @@ class DistRow {
   // The same for a one-off row; builds its own index (tests, small tools).
   DistRow(const Grid& grid, Cell goal, const std::vector<uint8_t>* blocked = nullptr);
 
+  // The distance from cell c (in the rotation model: from its best heading).
   int operator[](Cell c) const {
     const int32_t s = slot_of_[c];
     if (narrow_) {
@@ -73,19 +91,28 @@ class DistRow {
     const uint32_t v = d32_[s];
     return v == UINT32_MAX ? kUnreachable : int(v);
   }
+  // The distance from cell c facing h, turns counted in the rotation model (mapf: row[c]).
+  int at(Cell c, Heading h) const {
+    const int d = (*this)[c];
+    if (excess_.empty() || d >= kUnreachable) return d;
+    return d + ((excess_[slot_of_[c]] >> (2 * h)) & 3);
+  }
   Cell goal() const { return goal_; }
   bool narrow() const { return narrow_; }
+  ActionModel action_model() const { return index_->model; }
   // Heap and object bytes of this row (the shared index is counted once, by the table).
   size_t bytes() const;
 
  private:
   void bfs();
+  void bfs_rotation(int32_t goal_slot);
   std::shared_ptr<const FreeCellIndex> index_;
   const int32_t* slot_of_;
   Cell goal_;
   bool narrow_;
   std::vector<uint16_t> d16_;  // num_free + 1 slots, the last one unreachable (obstacles)
   std::vector<uint32_t> d32_;  // the same, for maps with more than 65,534 free cells
+  std::vector<uint8_t> excess_;  // rotation: per slot, 2 bits per heading over the least distance
 };
 
 class DistTable {
@@ -96,10 +123,16 @@ class DistTable {
   // stand where they stopped: paths avoid them, and a goal on one is still accepted (the
   // offline robot's own), but no other cell reaches it.
   DistTable(const Grid& grid, const std::vector<Cell>& blocked, size_t budget_bytes = kDefaultBudgetBytes);
+  // The same in an action model: kRotation rows count turns (see above).
+  DistTable(const Grid& grid, ActionModel model, size_t budget_bytes = kDefaultBudgetBytes);
+  DistTable(const Grid& grid, const std::vector<Cell>& blocked, ActionModel model,
+            size_t budget_bytes = kDefaultBudgetBytes);
 
   // The row for `goal`, computing it on first use. Throws std::out_of_range for a blocked goal.
   std::shared_ptr<const DistRow> row(Cell goal) const;
   int get(Cell goal, Cell from) const { return (*row(goal))[from]; }
+  int get(Cell goal, Cell from, Heading h) const { return row(goal)->at(from, h); }
+  ActionModel action_model() const { return index_->model; }
 
   // Computes the missing rows among `goals` in parallel (oneTBB), as a batch warm-up. Goals
   // that are not free cells are skipped. Rows are inserted as if queried in the given order.

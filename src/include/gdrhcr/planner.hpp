@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "gdrhcr/action_model.hpp"
 #include "gdrhcr/dist_table.hpp"
 #include "gdrhcr/grid.hpp"
 #include "gdrhcr/params.hpp"
@@ -32,6 +33,16 @@ struct WorldView {
   // agent stands on them (the cell a late robot is still leaving); null = none. Planners keep
   // agents out of them and plan around them; no agent's position is among them.
   const std::vector<Cell>* blocked = nullptr;
+  // The action model in force (action_model.hpp). kMapf (the default): no headings, as before.
+  // kRotation: headings[i] is agent i's heading now, and the planner writes agent i's heading at
+  // timestep+1 into (*next_headings)[i] (sized to the fleet by the caller) beside next[i]; the
+  // pair must be one action (F, R, C, W) from (positions[i], headings[i]). `dist` then holds
+  // rotation rows (DistTable::action_model()).
+  ActionModel action_model = ActionModel::kMapf;
+  const std::vector<Heading>* headings = nullptr;
+  std::vector<Heading>* next_headings = nullptr;
+  bool rotation() const { return action_model == ActionModel::kRotation; }
+  Pose pose(int i) const { return {positions[i], headings ? (*headings)[i] : kEast}; }
   int num_agents() const { return static_cast<int>(positions.size()); }
   bool is_immovable(int i) const { return immovable && (*immovable)[i]; }
   // The cells nothing may enter in this step: the immovable agents' cells and the blocked cells;
@@ -69,7 +80,9 @@ class Planner {
   virtual std::string name() const = 0;
   // Fills next[i] with agent i's cell at timestep+1: a wait or a move to a 4-neighbour, with no
   // vertex or edge collision. Positions may differ from what the planner commanded before (a
-  // robot may lag); planners must plan from the positions given.
+  // robot may lag); planners must plan from the positions given. In the rotation model it also
+  // fills (*world.next_headings)[i] (see WorldView); a planner built for the mapf model throws
+  // std::invalid_argument when given a rotation world (check_action_model).
   virtual StepReport plan_step(const WorldView& world, std::vector<Cell>& next) = 0;
   // Every parameter in use, for the result record.
   virtual nlohmann::json params() const = 0;
@@ -84,13 +97,19 @@ class Planner {
 
 // Planner names known to `make_planner`, in registration order.
 std::vector<std::string> planner_names();
-// Builds the planner with the values of the parameter table (PlannerParams::resolve).
+// Whether the named planner plans in the action model.
+bool planner_supports(const std::string& name, ActionModel model);
+// Throws std::invalid_argument naming `planner` when `world` is in another action model than the
+// one the planner was built for.
+void check_action_model(const std::string& planner, ActionModel built, const WorldView& world);
+// Builds the planner with the values of the parameter table (PlannerParams::resolve), to plan in
+// `model`. Throws ParamError naming the planner when it does not plan in that model.
 std::unique_ptr<Planner> make_planner(const PlannerParams& values, const Grid& grid, int num_agents,
-                                      uint64_t seed);
+                                      uint64_t seed, ActionModel model = ActionModel::kMapf);
 // Resolves `params` (e.g. --H 20 from the command line or a ROS parameter) against the planner's
 // table and builds it. Throws ParamError naming an unknown planner, an unknown parameter or a
 // bad value.
 std::unique_ptr<Planner> make_planner(const std::string& name, Params& params, const Grid& grid,
-                                      int num_agents, uint64_t seed);
+                                      int num_agents, uint64_t seed, ActionModel model = ActionModel::kMapf);
 
 }  // namespace gdrhcr

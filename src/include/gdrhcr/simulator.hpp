@@ -1,6 +1,9 @@
 // The lifelong MAPF simulation loop: ask the planner for every agent's next cell, validate the
 // step (a violation throws CollisionError), move, and hand a new goal to every agent that
-// reached its goal. Throughput = goals reached / timesteps.
+// reached its goal. Throughput = goals reached / timesteps. In the rotation action model
+// (action_model.hpp) every agent also carries a heading, the planner returns the next headings
+// and every step is validated as actions of that model; a goal is reached on its cell, in any
+// heading (as in LoRR).
 #pragma once
 
 #include <cstdint>
@@ -18,6 +21,10 @@ struct SimOptions {
   int steps = 500;
   int lookahead = 3;          // goals known per agent: the current one and lookahead-1 more
   bool record_paths = false;
+  // The action model in force; the DistTable given to run_simulation must be built in it.
+  ActionModel action_model = ActionModel::kMapf;
+  // Rotation: each agent's heading at the start; empty = all east (kEast), as in the Start-Kit.
+  std::vector<Heading> start_headings;
 };
 
 struct SimResult {
@@ -40,7 +47,9 @@ struct SimResult {
   long late_at_end = 0;      // agents whose current goal is late when the run ends
   int longest_wait = 0;      // most consecutive steps an agent stood still off its goal
   double max_lateness = 0;   // largest (steps taken or elapsed) / shortest distance of a goal
+  ActionModel action_model = ActionModel::kMapf;
   std::vector<std::vector<Cell>> paths;  // paths[agent][t], when recorded
+  std::vector<std::vector<Heading>> headings;  // headings[agent][t], when recorded in rotation
   nlohmann::json to_json() const;        // the figures above (not the paths)
 };
 
@@ -49,8 +58,12 @@ SimResult run_simulation(const Grid& grid, const DistTable& dist, TaskStream& ta
                          const SimOptions& options);
 
 // Goals per timestep if every agent followed the same goal sequence alone on shortest paths:
-// the physical upper bound a planner is compared against.
+// the physical upper bound a planner is compared against. With a rotation DistTable the paths
+// are over (cell, heading) states, so turns count: each agent starts with start_headings (empty
+// or null: east) and arrives at each goal with the heading of its shortest path (forward
+// preferred over a turn among equally short actions).
 double free_flow_throughput(const Grid& grid, const DistTable& dist, const TaskStream& tasks,
-                            const std::vector<Cell>& starts, int steps);
+                            const std::vector<Cell>& starts, int steps,
+                            const std::vector<Heading>* start_headings = nullptr);
 
 }  // namespace gdrhcr
