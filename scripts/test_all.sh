@@ -33,7 +33,7 @@ total_pass=$((total_pass + core_total - core_failed))
 total_fail=$((total_fail + core_failed))
 
 export FUZZ_SECONDS=${FUZZ_SECONDS:-15}  # scripts/fuzz.sh: a short run per target here
-for extra in scripts/sanitizer_tests.sh scripts/fuzz.sh scripts/ros_build.sh scripts/ros_test.sh; do
+for extra in scripts/sanitizer_tests.sh scripts/fuzz.sh scripts/lorr_test.sh scripts/ros_build.sh scripts/ros_test.sh; do
   [ -x "$extra" ] || continue
   section "$extra"
   if bash "$extra"; then total_pass=$((total_pass + 1)); else failed+=("$extra"); total_fail=$((total_fail + 1)); fi

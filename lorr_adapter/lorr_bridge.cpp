@@ -1,0 +1,131 @@
+// The core side of the Start-Kit adapter: builds the grid, the distance table and the planner
+// once, then turns every Start-Kit step into a planner step and its cells into MAPF_T actions
+// (gdrhcr::rotation_actions_for_step).
+#include "lorr_bridge.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <sstream>
+#include <stdexcept>
+
+#include "gdrhcr/dist_table.hpp"
+#include "gdrhcr/grid.hpp"
+#include "gdrhcr/lorr_io.hpp"
+#include "gdrhcr/params.hpp"
+#include "gdrhcr/planner.hpp"
+
+namespace gdrhcr_lorr {
+
+using namespace gdrhcr;
+
+namespace {
+
+std::string env_or(const char* name, const std::string& fallback) {
+  const char* v = std::getenv(name);
+  return v && *v ? std::string(v) : fallback;
+}
+
+double env_number(const char* name, double fallback) {
+  const std::string s = env_or(name, "");
+  if (s.empty()) return fallback;
+  char* end = nullptr;
+  const double v = std::strtod(s.c_str(), &end);
+  if (end == s.c_str() || *end != '\0' || !(v >= 0))
+    throw std::invalid_argument(std::string(name) + " must be a non-negative number, not '" + s + "'");
+  return v;
+}
+
+// "--H 10 --V=3" as (name, value) pairs.
+std::vector<std::pair<std::string, std::string>> parse_params(const std::string& text) {
+  std::istringstream in(text);
+  std::vector<std::string> words;
+  for (std::string w; in >> w;) words.push_back(w);
+  std::vector<std::pair<std::string, std::string>> out;
+  for (size_t i = 0; i < words.size(); ++i) {
+    const std::string& w = words[i];
+    if (w.rfind("--", 0) != 0 || w.size() < 3)
+      throw std::invalid_argument("GDRHCR_PARAMS: expected --NAME VALUE, got '" + w + "'");
+    const auto eq = w.find('=');
+    if (eq != std::string::npos) {
+      out.emplace_back(w.substr(2, eq - 2), w.substr(eq + 1));
+    } else {
+      if (i + 1 >= words.size()) throw std::invalid_argument("GDRHCR_PARAMS: " + w + " needs a value");
+      out.emplace_back(w.substr(2), words[++i]);
+    }
+  }
+  return out;
+}
+
+Grid grid_of(int rows, int cols, const std::vector<int>& map) {
+  if (rows <= 0 || cols <= 0 || map.size() != size_t(rows) * cols)
+    throw std::invalid_argument("lorr adapter: the Start-Kit's map is not rows x cols");
+  std::vector<std::string> lines(rows, std::string(cols, '.'));
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      if (map[size_t(r) * cols + c] == 1) lines[r][c] = '@';
+  return Grid::from_rows(lines, "lorr-start-kit");
+}
+
+}  // namespace
+
+BridgeOptions bridge_options_from_env() {
+  BridgeOptions o;
+  o.planner = env_or("GDRHCR_PLANNER", o.planner);
+  o.params = parse_params(env_or("GDRHCR_PARAMS", ""));
+  o.budget_ms = env_number("GDRHCR_BUDGET_MS", 0);
+  o.seed = static_cast<uint64_t>(env_number("GDRHCR_SEED", 0));
+  return o;
+}
+
+struct Bridge::Impl {
+  Impl(int rows, int cols, const std::vector<int>& map, int n, const BridgeOptions& o)
+      : options(o), grid(grid_of(rows, cols, map)), dist(grid), num_agents(n) {
+    Params params;
+    for (auto& [k, v] : o.params) params.set(k, v);
+    const double budget_s = o.budget_ms / 1000.0;
+    if (budget_s > 0 && o.planner == "gd-rhcr" && !params.has("step-budget"))
+      params.set("step-budget", std::to_string(budget_s));
+    if (budget_s > 0 && o.planner == "rhcr" && !params.has("timeout")) params.set("timeout", std::to_string(budget_s));
+    planner = make_planner(o.planner, params, grid, n, o.seed);
+    pos.resize(n);
+    next.resize(n);
+    goals.resize(n);
+  }
+
+  BridgeOptions options;
+  Grid grid;
+  DistTable dist;
+  int num_agents;
+  std::unique_ptr<Planner> planner;
+  std::vector<Cell> pos, next;
+  std::vector<std::vector<Cell>> goals;
+};
+
+Bridge::Bridge(int rows, int cols, const std::vector<int>& map, int num_agents, const BridgeOptions& options)
+    : impl_(std::make_unique<Impl>(rows, cols, map, num_agents, options)) {}
+
+Bridge::~Bridge() = default;
+
+void Bridge::plan(int timestep, const std::vector<int>& locations, const std::vector<int>& headings,
+                  const std::vector<std::vector<int>>& goal_locations, std::vector<int>& actions) {
+  Impl& m = *impl_;
+  const int n = m.num_agents;
+  if (static_cast<int>(locations.size()) != n || static_cast<int>(headings.size()) != n)
+    throw std::invalid_argument("lorr adapter: the Start-Kit gave " + std::to_string(locations.size()) +
+                                " agents, expected " + std::to_string(n));
+  for (int i = 0; i < n; ++i) {
+    m.pos[i] = locations[i];
+    m.goals[i].clear();
+    const auto& g = i < static_cast<int>(goal_locations.size()) ? goal_locations[i] : std::vector<int>{};
+    for (int c : g) m.goals[i].push_back(c);
+    if (m.goals[i].empty()) m.goals[i].push_back(m.pos[i]);  // no task: stay put
+  }
+  std::fill(m.next.begin(), m.next.end(), kNoCell);
+  WorldView view{m.grid, m.dist, timestep, m.pos, m.goals};
+  m.planner->plan_step(view, m.next);
+  const std::vector<LorrAction> act = rotation_actions_for_step(m.grid, m.pos, headings, m.next);
+  actions.assign(n, static_cast<int>(LorrAction::W));
+  for (int i = 0; i < n; ++i) actions[i] = static_cast<int>(act[i]);
+}
+
+}  // namespace gdrhcr_lorr

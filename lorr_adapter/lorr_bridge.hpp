@@ -1,0 +1,46 @@
+// Our planner behind the League of Robot Runners Start-Kit's MAPFPlanner (LoRR 2023, Start-Kit
+// v1.1.5, MIT): the Start-Kit's side (MAPFPlanner.cpp) sees only this header, which uses standard
+// types alone, so the Start-Kit's own nlohmann/json copy never meets the core's.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace gdrhcr_lorr {
+
+// Read from the environment (scripts/bench_lorr.sh sets them):
+//   GDRHCR_PLANNER    a name of gdrhcr::make_planner (default gd-rhcr)
+//   GDRHCR_PARAMS     its parameters as on gdrhcr_sim's command line, e.g. "--H 10 --V 3"
+//   GDRHCR_BUDGET_MS  our planner's time per step in ms (0 = none): GD-RHCR's step-budget and
+//                     RHCR's PBS timeout unless GDRHCR_PARAMS sets them
+//   GDRHCR_SEED       seed for the planner's tie-breaks (default 0)
+struct BridgeOptions {
+  std::string planner = "gd-rhcr";
+  std::vector<std::pair<std::string, std::string>> params;
+  double budget_ms = 0;
+  uint64_t seed = 0;
+};
+// Throws std::invalid_argument naming the variable for a malformed value.
+BridgeOptions bridge_options_from_env();
+
+class Bridge {
+ public:
+  // map[row * cols + col] = 1 for a blocked cell (the Start-Kit's env->map). Throws with a
+  // message naming the problem (unknown planner or parameter, bad value).
+  Bridge(int rows, int cols, const std::vector<int>& map, int num_agents, const BridgeOptions& options);
+  ~Bridge();
+  // One timestep: locations and headings (0 east, 1 south, 2 west, 3 north) of every agent and
+  // its revealed goal locations, current one first (empty: no task). actions[i] gets the
+  // Start-Kit's Action value (0 FW, 1 CR, 2 CCR, 3 W).
+  void plan(int timestep, const std::vector<int>& locations, const std::vector<int>& headings,
+            const std::vector<std::vector<int>>& goals, std::vector<int>& actions);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace gdrhcr_lorr

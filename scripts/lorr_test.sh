@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# CI test of the LoRR adapter (issue 23): our GD-RHCR as the Start-Kit's MAPFPlanner on a small
+# instance (test/lorr/small: 12 x 8 map, 6 agents, 60 steps), refereed by the Start-Kit's own
+# simulator. Fails unless the Start-Kit reports AllValid Yes, no error, no timed-out step, and
+# the agents finish tasks. The Start-Kit (v1.1.5) stays outside the repository:
+# $LORR_START_KIT, else ../shared/lorr/start-kit-v1.1.5 next to the repository, else
+# /work/shared/lorr/start-kit-v1.1.5.
+set -eo pipefail
+top=$(cd "$(dirname "$0")/.." && pwd)
+kit=${LORR_START_KIT:-}
+if [ -z "$kit" ]; then
+  for c in "$top/../shared/lorr/start-kit-v1.1.5" /work/shared/lorr/start-kit-v1.1.5; do
+    [ -f "$c/src/driver.cpp" ] && { kit=$c; break; }
+  done
+fi
+if [ -n "${LORR_START_KIT:-}" ] && [ ! -f "$kit/src/driver.cpp" ]; then
+  echo "lorr_test: FAIL: LORR_START_KIT=$LORR_START_KIT is not a LoRR Start-Kit (no src/driver.cpp);" \
+       "set it to the Start-Kit v1.1.5 directory" >&2
+  exit 1
+fi
+if [ -z "$kit" ]; then
+  echo "lorr_test: FAIL: no LoRR Start-Kit found in $top/../shared/lorr/start-kit-v1.1.5 or" \
+       "/work/shared/lorr/start-kit-v1.1.5; set LORR_START_KIT to the Start-Kit v1.1.5 directory" >&2
+  exit 1
+fi
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+bash "$top/scripts/bench_lorr.sh" "$kit" "$top/test/lorr/small/small.json" 60 "$tmp/out.json" 100
+/usr/bin/python3 - "$tmp/out.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+problems = []
+if r.get("AllValid") != "Yes": problems.append(f"AllValid is {r.get('AllValid')!r}")
+if r.get("errors"): problems.append(f"errors: {r['errors'][:5]}")
+if r.get("actionModel") != "MAPF_T": problems.append(f"actionModel {r.get('actionModel')!r}")
+paths = r.get("actualPaths", [])
+if len(paths) != 6 or any(len(p.split(",")) != 60 for p in paths): problems.append("not 6 paths of 60 actions")
+if any("T" in p.split(",") for p in r.get("plannerPaths", [])): problems.append("a planner step timed out (T)")
+if r.get("plannerPaths") != paths: problems.append("executed actions differ from the planner's")
+if not any("F" in p.split(",") for p in paths): problems.append("no agent ever moved forward")
+if r.get("numTaskFinished", 0) < 5: problems.append(f"only {r.get('numTaskFinished')} tasks finished")
+if problems:
+    print("lorr_test: FAIL: " + "; ".join(problems))
+    sys.exit(1)
+print(f"lorr_test: OK: AllValid Yes, no errors, {r['numTaskFinished']} tasks finished in 60 steps")
+PY
