@@ -11,6 +11,19 @@ namespace gd_rhcr_planner {
 
 using gdrhcr::kNoCell;
 
+namespace {
+
+// Robot r is on hold in the flags of the current call (tick or advance).
+bool on_hold(const std::vector<uint8_t>& hold, int r) { return r < static_cast<int>(hold.size()) && hold[r]; }
+
+// The caller's flags, or none.
+const std::vector<uint8_t>& hold_flags(const std::vector<uint8_t>* hold) {
+  static const std::vector<uint8_t> kNone;
+  return hold ? *hold : kNone;
+}
+
+}  // namespace
+
 const char* robot_health_name(RobotHealth h) {
   switch (h) {
     case RobotHealth::kOk: return "ok";
@@ -186,12 +199,10 @@ std::vector<int> Executor::advance(const std::vector<RobotRecord>& robots, const
     arrived = true;
   }
   if (!arrived) return changed;
-  hold_ = hold;
   TickOutput unused;
   // A move dispatched between ticks counts as dispatched in the coming tick: it is late only if
   // it is not made by the tick after.
-  dispatch_ready(unused, ticks_ + 1, &changed);
-  hold_ = nullptr;
+  dispatch_ready(unused, ticks_ + 1, hold_flags(hold), &changed);
   return changed;
 }
 
@@ -264,11 +275,12 @@ void Executor::resync() {
   }
 }
 
-int Executor::dispatch_ready(TickOutput& out, uint64_t stamp, std::vector<int>* sent) {
+int Executor::dispatch_ready(TickOutput& out, uint64_t stamp, const std::vector<uint8_t>& hold,
+                             std::vector<int>* sent) {
   int n = 0;
   for (int r = 0; r < num_robots(); ++r) {
     Track& t = tracks_[r];
-    if (!t.active || t.health != RobotHealth::kOk || t.dispatched || t.path.empty() || holds(r)) continue;
+    if (!t.active || t.health != RobotHealth::kOk || t.dispatched || t.path.empty() || on_hold(hold, r)) continue;
     auto it = visits_.find(t.path.front());
     if (it != visits_.end() && !it->second.empty() && it->second.front() == r) {
       t.dispatched = true;
@@ -340,8 +352,8 @@ int hold_rotations(const std::vector<Cell>& pos, std::vector<Cell>& next, std::v
   return count;
 }
 
-void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, DeadlinePlanner& planner,
-                               TickOutput& out) {
+void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, const std::vector<uint8_t>& hold,
+                               DeadlinePlanner& planner, TickOutput& out) {
   std::vector<int>& robot_of = out.robot_of_agent;
   robot_of.clear();
   for (int r = 0; r < num_robots(); ++r)
@@ -370,7 +382,7 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, Dead
     // included: a robot still on its way at the next tick is late) gets no further move in
     // this step; the others plan around its end state, so no commitments pile up behind a
     // late robot.
-    immovable[a] = static_cast<int>(t.path.size()) >= cfg_.commit_horizon || holds(r);
+    immovable[a] = static_cast<int>(t.path.size()) >= cfg_.commit_horizon || on_hold(hold, r);
     // Cells the planner must keep everybody out of in this step, as no robot there will leave
     // it soon: a late robot's (commanded in an earlier tick, not arrived) still fills the
     // cell it leaves, and a robot waiting for its committed move fills its cell until its
@@ -378,7 +390,7 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, Dead
     // routes them around (WorldView::blocked), and the hold cascade below still holds any
     // move into them.
     if ((t.dispatched && t.dispatched_at < ticks_) || (!t.dispatched && !t.path.empty())) late_cells.push_back(t.cell);
-    agent_goals[a] = holds(r) ? std::vector<Cell>{end} : planner_goals(r, goals[r], end);
+    agent_goals[a] = on_hold(hold, r) ? std::vector<Cell>{end} : planner_goals(r, goals[r], end);
   }
   for (const Track& t : tracks_)
     if (!t.active && t.claimed != kNoCell) blocked.push_back(t.claimed);
@@ -425,7 +437,7 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, Dead
 TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vector<std::vector<Cell>>& goals,
                           DeadlinePlanner& planner, bool proceed_without_missing, const std::vector<uint8_t>* hold) {
   TickOutput out;
-  hold_ = hold;
+  const std::vector<uint8_t>& held = hold_flags(hold);
   ++ticks_;
   const int n = num_robots();
   if (static_cast<int>(robots.size()) != n || static_cast<int>(goals.size()) != n) {
@@ -445,10 +457,10 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
   out.command.assign(n, kNoCell);
   out.end_state.assign(n, kNoCell);
   reconcile(robots, out);
-  dispatch_ready(out, ticks_);
+  dispatch_ready(out, ticks_, held);
   if (cfg_.revoke_behind_late) out.revoked = revoke_behind_late();
-  plan_and_commit(goals, planner, out);
-  dispatch_ready(out, ticks_);
+  plan_and_commit(goals, held, planner, out);
+  dispatch_ready(out, ticks_, held);
   out.stepped = true;
   out.cells.assign(n, kNoCell);
   out.health.assign(n, RobotHealth::kMissing);
@@ -458,9 +470,9 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
     if (!t.active) continue;
     out.cells[r] = t.cell;
     // On hold and at rest: told to stay; its commanded cell stays reserved for when it is released.
-    out.command[r] = t.dispatched && !(holds(r) && !t.reported_moving) ? t.path.front() : t.cell;
+    out.command[r] = t.dispatched && !(on_hold(held, r) && !t.reported_moving) ? t.path.front() : t.cell;
     out.end_state[r] = t.path.empty() ? t.cell : t.path.back();
-    if (t.health == RobotHealth::kOk && !t.dispatched && !t.path.empty() && !holds(r)) ++out.waiting;
+    if (t.health == RobotHealth::kOk && !t.dispatched && !t.path.empty() && !on_hold(held, r)) ++out.waiting;
   }
   return out;
 }

@@ -8,6 +8,7 @@
 
 #include <cstdlib>
 #include <functional>
+#include <memory>
 #include <random>
 
 #include "gd_rhcr_planner/delayed_fleet.hpp"
@@ -323,7 +324,9 @@ TEST(ExecutorAdg, BadRobotsBecomeObstaclesAndTheRestKeepsMoving) {
 }
 
 // Between ticks a robot behind another is sent into its cell once that robot reports arrival in
-// the next cell (not while it is still moving), and a robot on hold is not.
+// the next cell (not while it is still moving), and a robot on hold is not. Hold flags count for
+// the call they are given to only: each call gets its own, short-lived vector (the executor
+// used to keep a pointer to the caller's flags).
 TEST(ExecutorAdg, ARobotBehindGoesAsSoonAsTheOneAheadHasArrived) {
   const Grid g = Grid::from_rows({"......"});
   gdrhcr::DistTable dist(g);
@@ -340,21 +343,26 @@ TEST(ExecutorAdg, ARobotBehindGoesAsSoonAsTheOneAheadHasArrived) {
     EXPECT_EQ(out.command[0], g.cell(3, 0));
     EXPECT_EQ(out.command[1], g.cell(1, 0)) << "robot 0 is still in (2,0)";
     EXPECT_EQ(out.waiting, 1);
-    std::vector<uint8_t> hold{0, on_hold};
+    auto hold = [&] { return std::make_unique<std::vector<uint8_t>>(std::vector<uint8_t>{0, on_hold}); };
     robots[0].moving = true;
-    EXPECT_TRUE(ex.advance(robots, &hold).empty()) << "robot 0 has not left (2,0) yet";
+    EXPECT_TRUE(ex.advance(robots, hold().get()).empty()) << "robot 0 has not left (2,0) yet";
     EXPECT_EQ(ex.command(1), g.cell(1, 0));
     robots[0] = at(g, 3, 0);  // arrived
-    const std::vector<int> sent = ex.advance(robots, &hold);
+    const std::vector<int> sent = ex.advance(robots, hold().get());
     EXPECT_EQ(ex.cell(0), g.cell(3, 0));
     EXPECT_EQ(ex.check_invariants(), "");
     if (on_hold) {
       EXPECT_TRUE(sent.empty());
       EXPECT_EQ(ex.command(1), g.cell(1, 0));
+      // The next tick, without flags: robot 1 is released and sent.
+      fn->fn = nullptr;
+      out = ex.tick(robots, stay_goals(robots), *planner, false);
+      EXPECT_EQ(out.command[1], g.cell(2, 0));
+      EXPECT_EQ(out.waiting, 0);
     } else {
       EXPECT_EQ(sent, std::vector<int>{1});
       EXPECT_EQ(ex.command(1), g.cell(2, 0));
-      EXPECT_TRUE(ex.advance(robots, &hold).empty()) << "nothing new: nothing sent twice";
+      EXPECT_TRUE(ex.advance(robots, hold().get()).empty()) << "nothing new: nothing sent twice";
     }
   }
 }

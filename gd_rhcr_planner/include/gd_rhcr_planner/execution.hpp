@@ -79,7 +79,8 @@ class Executor {
   // proceed_without_missing: robots that never reported are left out; when false, no step is made
   // while any robot is missing. The planner must have been built for at least num_robots agents.
   // hold (optional, per robot): robots that get no new move (paused, emergency stop); a move
-  // already commanded is not taken back (the robot may be making it).
+  // already commanded is not taken back (the robot may be making it). The flags are read during
+  // this call only (as are advance()'s): pass them again to hold the robots in the next call.
   TickOutput tick(const std::vector<RobotRecord>& robots, const std::vector<std::vector<Cell>>& goals,
                   DeadlinePlanner& planner, bool proceed_without_missing,
                   const std::vector<uint8_t>* hold = nullptr);
@@ -128,14 +129,16 @@ class Executor {
   void arrive(int r);
   int revoke(int r);
   int revoke_behind_late();
-  // Dispatches every move whose cell's earlier visitors have left; `sent` (optional) gets the robots.
-  int dispatch_ready(TickOutput& out, uint64_t stamp, std::vector<int>* sent = nullptr);
-  bool holds(int r) const { return hold_ && r < static_cast<int>(hold_->size()) && (*hold_)[r]; }
+  // Dispatches every move whose cell's earlier visitors have left, except to robots on hold;
+  // `sent` (optional) gets the robots.
+  int dispatch_ready(TickOutput& out, uint64_t stamp, const std::vector<uint8_t>& hold,
+                     std::vector<int>* sent = nullptr);
   int holder_of(Cell c, int except) const;
   void add_blocked_cells(int r, std::vector<Cell>& blocked) const;
   const gdrhcr::DistTable& dist_for(const std::vector<Cell>& obstacles);
   std::vector<Cell> planner_goals(int r, const std::vector<Cell>& fleet_goals, Cell end) const;
-  void plan_and_commit(const std::vector<std::vector<Cell>>& goals, DeadlinePlanner& planner, TickOutput& out);
+  void plan_and_commit(const std::vector<std::vector<Cell>>& goals, const std::vector<uint8_t>& hold,
+                       DeadlinePlanner& planner, TickOutput& out);
 
   const gdrhcr::Grid& grid_;
   const gdrhcr::DistTable& dist_;
@@ -146,7 +149,6 @@ class Executor {
   std::vector<Cell> obstacle_cells_;  // the cells the current obstacle table blocks
   std::shared_ptr<const gdrhcr::DistTable> obstacle_dist_;
   uint64_t steps_ = 0, resyncs_total_ = 0, ticks_ = 0;
-  const std::vector<uint8_t>* hold_ = nullptr;  // during tick()
 };
 
 // Cycles of robots that would each enter the cell the next one leaves (rotations, and swaps) cannot
