@@ -66,6 +66,18 @@ Grid grid_of(int rows, int cols, const std::vector<int>& map) {
   return Grid::from_rows(lines, "lorr-start-kit");
 }
 
+// The Start-Kit's `enum Action {FW, CR, CCR, W, NA}` values.
+constexpr int kStartKitWait = 3;
+int start_kit_action(Action a) {
+  switch (a) {
+    case Action::kForward: return 0;
+    case Action::kClockwise: return 1;
+    case Action::kCounterClockwise: return 2;
+    case Action::kWait: return kStartKitWait;
+  }
+  return kStartKitWait;
+}
+
 }  // namespace
 
 BridgeOptions bridge_options_from_env() {
@@ -88,6 +100,7 @@ struct Bridge::Impl {
     if (budget_s > 0 && o.planner == "rhcr" && !params.has("timeout")) params.set("timeout", std::to_string(budget_s));
     planner = make_planner(o.planner, params, grid, n, o.seed);
     pos.resize(n);
+    headings.resize(n);
     next.resize(n);
     goals.resize(n);
   }
@@ -98,6 +111,7 @@ struct Bridge::Impl {
   int num_agents;
   std::unique_ptr<Planner> planner;
   std::vector<Cell> pos, next;
+  std::vector<Heading> headings;
   std::vector<std::vector<Cell>> goals;
 };
 
@@ -123,9 +137,10 @@ void Bridge::plan(int timestep, const std::vector<int>& locations, const std::ve
   std::fill(m.next.begin(), m.next.end(), kNoCell);
   WorldView view{m.grid, m.dist, timestep, m.pos, m.goals};
   m.planner->plan_step(view, m.next);
-  const std::vector<LorrAction> act = rotation_actions_for_step(m.grid, m.pos, headings, m.next);
-  actions.assign(n, static_cast<int>(LorrAction::W));
-  for (int i = 0; i < n; ++i) actions[i] = static_cast<int>(act[i]);
+  for (int i = 0; i < n; ++i) m.headings[i] = static_cast<Heading>(headings[i]);
+  const std::vector<Action> act = rotation_actions_for_step(m.grid, m.pos, m.headings, m.next);
+  actions.assign(n, kStartKitWait);
+  for (int i = 0; i < n; ++i) actions[i] = start_kit_action(act[i]);
 }
 
 }  // namespace gdrhcr_lorr

@@ -168,47 +168,29 @@ char move_letter(const Grid& grid, Cell a, Cell b) {
 }
 }  // namespace
 
-char lorr_letter(LorrAction a) {
-  switch (a) {
-    case LorrAction::FW: return 'F';
-    case LorrAction::CR: return 'R';
-    case LorrAction::CCR: return 'C';
-    case LorrAction::W: return 'W';
-  }
-  return '?';
+namespace {
+// The first quarter turn from `heading` towards `target` (clockwise for a half turn).
+Action turn_towards(Heading heading, Heading target) {
+  return ((target - heading) & 3) == 3 ? Action::kCounterClockwise : Action::kClockwise;
 }
+}  // namespace
 
-int lorr_heading(const Grid& grid, Cell a, Cell b) {
-  const int dx = grid.x_of(b) - grid.x_of(a), dy = grid.y_of(b) - grid.y_of(a);
-  if (dy == 0 && dx == 1) return 0;
-  if (dx == 0 && dy == 1) return 1;
-  if (dy == 0 && dx == -1) return 2;
-  if (dx == 0 && dy == -1) return 3;
-  return -1;
-}
-
-LorrAction lorr_turn_towards(int heading, int target) {
-  const int diff = ((target - heading) % 4 + 4) % 4;
-  return diff == 0 ? LorrAction::W : diff == 3 ? LorrAction::CCR : LorrAction::CR;
-}
-
-std::vector<LorrAction> rotation_actions_for_step(const Grid& grid, const std::vector<Cell>& pos,
-                                                  const std::vector<int>& headings,
-                                                  const std::vector<Cell>& next) {
+std::vector<Action> rotation_actions_for_step(const Grid& grid, const std::vector<Cell>& pos,
+                                              const std::vector<Heading>& headings, const std::vector<Cell>& next) {
   const int n = static_cast<int>(pos.size());
-  std::vector<LorrAction> act(n, LorrAction::W);
+  std::vector<Action> act(n, Action::kWait);
   std::vector<int> entering(grid.num_cells(), -1);  // the agent moving into a cell, if any
   std::vector<int> staying;
   for (int i = 0; i < n; ++i) {
-    const int d = next[i] == pos[i] ? -1 : lorr_heading(grid, pos[i], next[i]);
-    if (next[i] != pos[i] && d < 0)
+    const Heading d = heading_of_move(grid, pos[i], next[i]);
+    if (next[i] != pos[i] && d == kNoHeading)
       throw std::logic_error("rotation_actions_for_step: agent " + std::to_string(i) + " jumps from " +
                              grid.describe(pos[i]) + " to " + grid.describe(next[i]));
-    if (d >= 0 && d == headings[i]) {
-      act[i] = LorrAction::FW;
+    if (d != kNoHeading && d == headings[i]) {
+      act[i] = Action::kForward;
       entering[next[i]] = i;
     } else {
-      if (d >= 0) act[i] = lorr_turn_towards(headings[i], d);
+      if (d != kNoHeading) act[i] = turn_towards(headings[i], d);
       staying.push_back(i);
     }
   }
@@ -216,8 +198,8 @@ std::vector<LorrAction> rotation_actions_for_step(const Grid& grid, const std::v
     const int i = staying.back();
     staying.pop_back();
     const int j = entering[pos[i]];
-    if (j < 0 || act[j] != LorrAction::FW) continue;
-    act[j] = LorrAction::W;  // it faces its next cell already
+    if (j < 0 || act[j] != Action::kForward) continue;
+    act[j] = Action::kWait;  // it faces its next cell already
     staying.push_back(j);
   }
   return act;

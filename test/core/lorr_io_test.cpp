@@ -219,18 +219,6 @@ TEST(LorrIo, OutputReplaysOurOwnPathsExactly) {
   }
 }
 
-namespace {
-// Applies MAPF_T actions as the Start-Kit does (ActionModelWithRotate::result_state).
-void apply_rotation(const Grid& g, std::vector<Cell>& pos, std::vector<int>& heading,
-                    const std::vector<LorrAction>& act) {
-  const int dx[4] = {1, 0, -1, 0}, dy[4] = {0, 1, 0, -1};
-  for (size_t i = 0; i < pos.size(); ++i) {
-    if (act[i] == LorrAction::FW) pos[i] = g.cell(g.x_of(pos[i]) + dx[heading[i]], g.y_of(pos[i]) + dy[heading[i]]);
-    if (act[i] == LorrAction::CR) heading[i] = (heading[i] + 1) % 4;
-    if (act[i] == LorrAction::CCR) heading[i] = (heading[i] + 3) % 4;
-  }
-}
-}  // namespace
 
 TEST(LorrIo, RotationActionsStopWhoeverFollowsAnAgentThatTurns) {
   Grid g = Grid::from_rows({"......", "......"});
@@ -238,25 +226,22 @@ TEST(LorrIo, RotationActionsStopWhoeverFollowsAnAgentThatTurns) {
   // faces north but wants to go east, so it turns (clockwise from north) and 1 and 0 wait.
   const std::vector<Cell> pos{g.cell(0, 0), g.cell(1, 0), g.cell(2, 0), g.cell(5, 0)};
   const std::vector<Cell> next{g.cell(1, 0), g.cell(2, 0), g.cell(3, 0), g.cell(5, 1)};
-  const std::vector<int> heading{0, 0, 3, 1};
+  const std::vector<Heading> heading{kEast, kEast, kNorth, kSouth};
+  using A = Action;
   const auto act = rotation_actions_for_step(g, pos, heading, next);
-  EXPECT_EQ(act, (std::vector<LorrAction>{LorrAction::W, LorrAction::W, LorrAction::CR, LorrAction::FW}));
-  // Facing away: a half turn, clockwise; facing right after a clockwise quarter: counter-clockwise.
-  EXPECT_EQ(lorr_turn_towards(2, 0), LorrAction::CR);
-  EXPECT_EQ(lorr_turn_towards(1, 0), LorrAction::CCR);
-  EXPECT_EQ(lorr_turn_towards(3, 0), LorrAction::CR);
+  EXPECT_EQ(act, (std::vector<A>{A::kWait, A::kWait, A::kClockwise, A::kForward}));
+  // Facing away (west, wants east): a half turn, clockwise first; facing south: counter-clockwise.
+  EXPECT_EQ(rotation_actions_for_step(g, {g.cell(5, 0)}, {kWest}, {g.cell(4, 0)})[0], A::kForward);
+  EXPECT_EQ(rotation_actions_for_step(g, {g.cell(0, 0)}, {kWest}, {g.cell(1, 0)})[0], A::kClockwise);
+  EXPECT_EQ(rotation_actions_for_step(g, {g.cell(0, 0)}, {kSouth}, {g.cell(1, 0)})[0], A::kCounterClockwise);
   // A rotating cycle of four, all facing their next cell, moves as one.
   const std::vector<Cell> cyc{g.cell(0, 0), g.cell(1, 0), g.cell(1, 1), g.cell(0, 1)};
   const std::vector<Cell> cyc_next{g.cell(1, 0), g.cell(1, 1), g.cell(0, 1), g.cell(0, 0)};
-  EXPECT_EQ(rotation_actions_for_step(g, cyc, {0, 1, 2, 3}, cyc_next), std::vector<LorrAction>(4, LorrAction::FW));
+  EXPECT_EQ(rotation_actions_for_step(g, cyc, {kEast, kSouth, kWest, kNorth}, cyc_next), std::vector<A>(4, A::kForward));
   // One of them turning stops the whole cycle.
-  EXPECT_EQ(rotation_actions_for_step(g, cyc, {0, 1, 2, 2}, cyc_next),
-            (std::vector<LorrAction>{LorrAction::W, LorrAction::W, LorrAction::W, LorrAction::CR}));
-  EXPECT_EQ(lorr_letter(LorrAction::FW), 'F');
-  EXPECT_EQ(lorr_letter(LorrAction::CR), 'R');
-  EXPECT_EQ(lorr_letter(LorrAction::CCR), 'C');
-  EXPECT_EQ(lorr_letter(LorrAction::W), 'W');
-  EXPECT_THROW(rotation_actions_for_step(g, {g.cell(0, 0)}, {0}, {g.cell(2, 0)}), std::logic_error);
+  EXPECT_EQ(rotation_actions_for_step(g, cyc, {kEast, kSouth, kWest, kWest}, cyc_next),
+            (std::vector<A>{A::kWait, A::kWait, A::kWait, A::kClockwise}));
+  EXPECT_THROW(rotation_actions_for_step(g, {g.cell(0, 0)}, {kEast}, {g.cell(2, 0)}), std::logic_error);
 }
 
 TEST(LorrIo, RotationActionsOfAPlannerStayValidStepAfterStep) {
@@ -270,24 +255,25 @@ TEST(LorrIo, RotationActionsOfAPlannerStayValidStepAfterStep) {
   auto planner = make_planner("pibt", params, w, n, 1);
   RandomNavigationStream tasks(w, 2);
   std::vector<Cell> pos = random_starts(w, n, 5), next(n);
-  std::vector<int> heading(n);
-  for (int i = 0; i < n; ++i) heading[i] = i % 4;
+  std::vector<Heading> heading(n);
+  for (int i = 0; i < n; ++i) heading[i] = static_cast<Heading>(i % 4);
   std::vector<std::vector<Cell>> goals(n);
   for (int i = 0; i < n; ++i) goals[i] = {tasks.next_goal(i, pos[i])};
-  StepValidator validator(w);
+  StepValidator validator(w, ActionModel::kRotation);
   long reached = 0, forward = 0;
   for (int t = 0; t < 150; ++t) {
     std::fill(next.begin(), next.end(), kNoCell);
     planner->plan_step(WorldView{w, dist, t, pos, goals}, next);
     const auto act = rotation_actions_for_step(w, pos, heading, next);
     std::vector<Cell> moved = pos;
-    std::vector<int> turned = heading;
-    apply_rotation(w, moved, turned, act);
+    std::vector<Heading> turned = heading;
     for (int i = 0; i < n; ++i) {
+      const Pose p = apply_action(w, Pose{pos[i], heading[i]}, act[i]);
+      moved[i] = p.cell, turned[i] = p.heading;
       ASSERT_TRUE(moved[i] == pos[i] || moved[i] == next[i]) << "agent " << i << " left its planned cell";
       forward += moved[i] != pos[i];
     }
-    ASSERT_NO_THROW(validator.require_valid(pos, moved, t));
+    ASSERT_NO_THROW(validator.require_valid(pos, moved, t, &heading, &turned));
     pos = moved;
     heading = turned;
     for (int i = 0; i < n; ++i)

@@ -31,6 +31,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "gdrhcr/action_model.hpp"
 #include "gdrhcr/grid.hpp"
 #include "gdrhcr/task_stream.hpp"
 
@@ -52,27 +53,13 @@ struct LorrProblem {
   std::vector<Cell> tasks;
 };
 
-// LoRR's rotation action model, "MAPF_T" (Start-Kit v1.1.5, inc/ActionModel.h and
-// src/ActionModel.cpp): every agent has a heading, 0 east (col + 1), 1 south (row + 1), 2 west
-// (col - 1), 3 north (row - 1), and takes one action per timestep: FW one cell along its heading,
-// CR clockwise (heading + 1), CCR counter-clockwise (heading - 1), W wait. Vertex and edge
-// conflicts are as in our validator. The values are the Start-Kit's `enum Action`; its output
-// letters are F, R, C, W.
-enum class LorrAction : uint8_t { FW = 0, CR = 1, CCR = 2, W = 3 };
-char lorr_letter(LorrAction a);
-// The heading that takes a to its 4-neighbour b, or -1 when b is not one.
-int lorr_heading(const Grid& grid, Cell a, Cell b);
-// The turn that brings `heading` one quarter nearer to `target` (CR for a half turn), W when equal.
-LorrAction lorr_turn_towards(int heading, int target);
-
-// A valid step of our MAPF planners (pos -> next, Planner::plan_step) as MAPF_T actions, kept
-// valid conservatively: an agent facing its next cell moves forward; one not facing it turns
+// A valid step of our MAPF planners (pos -> next, Planner::plan_step) as actions of the rotation
+// model (action_model.hpp, LoRR's MAPF_T), kept valid conservatively: an agent facing its next cell moves forward; one not facing it turns
 // towards it and stays; an agent whose next cell is the cell of an agent that stays, stays too
-// (transitively, so no vertex conflict appears), and turns towards its cell meanwhile. The MAPF
-// step has no swaps, so the result has none. headings[i] in 0..3.
-std::vector<LorrAction> rotation_actions_for_step(const Grid& grid, const std::vector<Cell>& pos,
-                                                  const std::vector<int>& headings,
-                                                  const std::vector<Cell>& next);
+// (transitively, so no vertex conflict appears). The MAPF step has no swaps, so the result has
+// none. A half turn starts clockwise.
+std::vector<Action> rotation_actions_for_step(const Grid& grid, const std::vector<Cell>& pos,
+                                              const std::vector<Heading>& headings, const std::vector<Cell>& next);
 
 // Reads the problem JSON and the files it names. Throws LorrError (or MapError for the map).
 LorrProblem load_lorr_problem(const std::string& problem_path);
