@@ -28,62 +28,80 @@ void DispatchParams::validate() const {
 
 namespace {
 constexpr int64_t kNoRoute = int64_t(1) << 40;  // a pair that must not be matched
-}
 
-BatchResult solve_batch(const std::vector<DispatchRobot>& robots, const std::vector<DispatchTask>& tasks_in,
-                        const gdrhcr::DistTable& dist, const DispatchParams& params) {
-  const auto t0 = std::chrono::steady_clock::now();
-  BatchResult out;
-  // Highest priority first, then lowest id (oldest); at most max_tasks.
+// The batch: highest priority first, then lowest id (oldest); at most max_tasks.
+std::vector<const DispatchTask*> batch_tasks(const std::vector<DispatchTask>& tasks_in, const DispatchParams& params) {
   std::vector<const DispatchTask*> tasks;
   for (auto& t : tasks_in) tasks.push_back(&t);
   std::stable_sort(tasks.begin(), tasks.end(), [](const DispatchTask* a, const DispatchTask* b) {
     return a->priority != b->priority ? a->priority > b->priority : a->id < b->id;
   });
   if (static_cast<int>(tasks.size()) > params.max_tasks) tasks.resize(params.max_tasks);
-  out.stats.robots = static_cast<int>(robots.size());
-  out.stats.tasks = static_cast<int>(tasks.size());
+  return tasks;
+}
 
-  std::map<int, size_t> row_of_robot;
-  for (size_t i = 0; i < robots.size(); ++i) row_of_robot[robots[i].id] = i;
+// Travel cost of robots[rows[r]] to tasks[c] (row-major, rows.size() x tasks.size()): the robot's
+// eta plus the distance to the pickup, less the task's age bonus, less the switch margin for the
+// task's own holder; kNoRoute where the pickup cannot be reached.
+std::vector<int64_t> cost_matrix(const std::vector<DispatchRobot>& robots, const std::vector<int>& rows,
+                                 const std::vector<const DispatchTask*>& tasks, const gdrhcr::DistTable& dist,
+                                 const DispatchParams& params) {
+  const size_t nr = rows.size(), nc = tasks.size();
+  std::vector<int64_t> cost(nr * nc);
+  for (size_t c = 0; c < nc; ++c) {
+    const DispatchTask& t = *tasks[c];
+    const auto row = dist.row(t.pickup);
+    // Waiting lowers a task's cost by the same amount for every robot: it only decides which
+    // tasks are served when there are fewer robots than tasks.
+    const int64_t age = static_cast<int64_t>(std::llround(params.age_weight * t.waited));
+    for (size_t r = 0; r < nr; ++r) {
+      const DispatchRobot& rob = robots[rows[r]];
+      const int d = (*row)[rob.from];
+      int64_t v = d >= gdrhcr::kUnreachable ? kNoRoute : int64_t(rob.eta) + d - age;
+      if (d < gdrhcr::kUnreachable && rob.id == t.holder) v -= params.switch_margin;
+      cost[r * nc + c] = v;
+    }
+  }
+  return cost;
+}
+
+// Minimum total cost matching, one priority level at a time (higher levels first, each with the
+// robots the levels before left): task id -> index in `robots`.
+std::map<uint64_t, int> match_by_priority(const std::vector<DispatchRobot>& robots,
+                                          const std::vector<const DispatchTask*>& tasks, const gdrhcr::DistTable& dist,
+                                          const DispatchParams& params) {
   std::vector<char> robot_used(robots.size(), 0);
-  std::map<uint64_t, int> match;  // task -> robot index it was matched to
+  std::map<uint64_t, int> match;
   for (size_t begin = 0; begin < tasks.size();) {
     size_t end = begin;
     while (end < tasks.size() && tasks[end]->priority == tasks[begin]->priority) ++end;
     std::vector<int> rows;
     for (size_t i = 0; i < robots.size(); ++i)
       if (!robot_used[i]) rows.push_back(static_cast<int>(i));
-    const int nr = static_cast<int>(rows.size()), nc = static_cast<int>(end - begin);
-    if (nr == 0) break;
-    std::vector<int64_t> cost(static_cast<size_t>(nr) * nc);
-    for (int c = 0; c < nc; ++c) {
-      const DispatchTask& t = *tasks[begin + c];
-      const auto row = dist.row(t.pickup);
-      // Waiting lowers a task's cost by the same amount for every robot: it only decides which
-      // tasks are served when there are fewer robots than tasks.
-      const int64_t age = static_cast<int64_t>(std::llround(params.age_weight * t.waited));
-      for (int r = 0; r < nr; ++r) {
-        const DispatchRobot& rob = robots[rows[r]];
-        const int d = (*row)[rob.from];
-        int64_t v = d >= gdrhcr::kUnreachable ? kNoRoute : int64_t(rob.eta) + d - age;
-        if (d < gdrhcr::kUnreachable && rob.id == t.holder) v -= params.switch_margin;
-        cost[static_cast<size_t>(r) * nc + c] = v;
-      }
-    }
+    if (rows.empty()) break;
+    const std::vector<const DispatchTask*> level(tasks.begin() + begin, tasks.begin() + end);
+    const int nr = static_cast<int>(rows.size()), nc = static_cast<int>(level.size());
+    const std::vector<int64_t> cost = cost_matrix(robots, rows, level, dist, params);
     const auto col_of_row = min_cost_assignment(cost, nr, nc);
     for (int r = 0; r < nr; ++r) {
       const int c = col_of_row[r];
       if (c < 0 || cost[static_cast<size_t>(r) * nc + c] >= kNoRoute / 2) continue;
       robot_used[rows[r]] = 1;
-      match[tasks[begin + c]->id] = rows[r];
+      match[level[c]->id] = rows[r];
     }
     begin = end;
   }
+  return match;
+}
 
-  // Decide each task's holder. Robots about to finish only reserve: their task stays where it is
-  // (queued, or with its robot when that robot got nothing else).
-  std::map<int, uint64_t> new_task_of;  // robot id -> task it takes now
+// Each batch task's holder after the matching (out.changes, out.stats). Robots about to finish
+// only reserve: their task stays where it is (queued, or with its robot when that robot got
+// nothing else). Returns the task each robot takes now (robot id -> task).
+std::map<int, uint64_t> decide_holders(const std::vector<DispatchRobot>& robots,
+                                       const std::vector<const DispatchTask*>& tasks,
+                                       const std::map<uint64_t, int>& match, const gdrhcr::DistTable& dist,
+                                       BatchResult& out) {
+  std::map<int, uint64_t> new_task_of;
   for (auto& [task, ri] : match)
     if (robots[ri].can_take_now()) new_task_of[robots[ri].id] = task;
   for (const DispatchTask* t : tasks) {
@@ -102,6 +120,20 @@ BatchResult solve_batch(const std::vector<DispatchRobot>& robots, const std::vec
     if (holder >= 0 && t->holder < 0) ++out.stats.assigned;
     if (holder >= 0 && t->holder >= 0) ++out.stats.reassigned;
   }
+  return new_task_of;
+}
+
+}  // namespace
+
+BatchResult solve_batch(const std::vector<DispatchRobot>& robots, const std::vector<DispatchTask>& tasks_in,
+                        const gdrhcr::DistTable& dist, const DispatchParams& params) {
+  const auto t0 = std::chrono::steady_clock::now();
+  BatchResult out;
+  const std::vector<const DispatchTask*> tasks = batch_tasks(tasks_in, params);
+  out.stats.robots = static_cast<int>(robots.size());
+  out.stats.tasks = static_cast<int>(tasks.size());
+  const std::map<uint64_t, int> match = match_by_priority(robots, tasks, dist, params);
+  std::map<int, uint64_t> new_task_of = decide_holders(robots, tasks, match, dist, out);
   // Tasks outside the batch (beyond max_tasks) whose robot took a batch task go back to the queue.
   for (auto& t : tasks_in) {
     if (t.holder < 0 || !new_task_of.count(t.holder) || new_task_of[t.holder] == t.id) continue;

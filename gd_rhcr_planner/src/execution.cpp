@@ -16,6 +16,8 @@ namespace {
 // Robot r is on hold in the flags of the current call (tick or advance).
 bool on_hold(const std::vector<uint8_t>& hold, int r) { return r < static_cast<int>(hold.size()) && hold[r]; }
 
+std::string who(int r) { return "robot " + std::to_string(r); }
+
 // The caller's flags, or none.
 const std::vector<uint8_t>& hold_flags(const std::vector<uint8_t>* hold) {
   static const std::vector<uint8_t> kNone;
@@ -71,101 +73,124 @@ void Executor::add_blocked_cells(int r, std::vector<Cell>& blocked) const {
 
 void Executor::reconcile(const std::vector<RobotRecord>& robots, TickOutput& out) {
   bool need_resync = false;
-  auto who = [&](int r) { return "robot " + std::to_string(r); };
   for (int r = 0; r < num_robots(); ++r) {
-    Track& t = tracks_[r];
     const RobotRecord& rec = robots[r];
     if (!rec.reported) continue;  // missing: stays out
-    const Cell x = rec.cell;
-    t.reported_moving = rec.moving;
-    if (!t.active) {  // its first report, or it could not be placed before
-      if (rec.silent) continue;
-      const int other = holder_of(x, r);
-      if (other >= 0) {
-        if (t.health != RobotHealth::kInconsistent || t.claimed != x)
-          out.warnings.push_back(who(r) + " reports cell " + grid_.describe(x) + ", which robot " +
-                                 std::to_string(other) + " holds: not planned (an obstacle there) until it reports a free cell");
-        t.health = RobotHealth::kInconsistent;
-        t.claimed = x;
-        continue;
-      }
-      t = Track{};
-      t.reported_moving = rec.moving;
-      t.active = true;
-      t.cell = x;
-      t.unknown_move = rec.moving;
-      t.health = rec.moving ? RobotHealth::kInconsistent : rec.reported_offline ? RobotHealth::kOffline : RobotHealth::kOk;
-      if (rec.moving)
-        out.warnings.push_back(who(r) + " first reports while moving: an obstacle until it stops");
-      need_resync = true;
-      continue;
-    }
-    if (rec.silent) {  // no news: it stays where we know it is, and what it may be entering stays held
-      if (t.health != RobotHealth::kSilent) {
-        out.warnings.push_back(who(r) + " is silent: an obstacle at " + grid_.describe(t.cell) +
-                               (t.dispatched ? " and " + grid_.describe(t.path.front()) : std::string()));
-        t.health = RobotHealth::kSilent;
-        need_resync = true;
-      }
-      continue;
-    }
-    RobotHealth h = rec.reported_offline ? RobotHealth::kOffline : RobotHealth::kOk;
-    if (x == t.cell) {
-      t.claimed = kNoCell;
-      if (t.dispatched && rec.reported_offline && !rec.moving) {  // OFFLINE at rest: it will not make the move
-        t.dispatched = false;
-        t.path.clear();
-        need_resync = true;
-      }
-    } else if (t.dispatched && x == t.path.front()) {
-      arrive(r);
-    } else {  // a cell it was not commanded into
-      // A slip (it ended in a free neighbour of the cell it was in) is taken as the truth;
-      // a cell another robot holds, or a jump, is not: the robot is an obstacle at both cells.
-      const int other = holder_of(x, r);
-      const bool reachable = grid_.step_allowed(t.cell, x);  // one move from where it was
-      // A robot that already claimed this very cell while another robot held it is not believed
-      // now that the cell is free: the same report stays inconsistent.
-      const bool same_claim = t.health == RobotHealth::kInconsistent && t.claimed == x;
-      if (other < 0 && reachable && !same_claim) {
-        out.warnings.push_back(who(r) + " reports " + grid_.describe(x) + ", not the cell it was commanded (" +
-                               grid_.describe(t.dispatched ? t.path.front() : t.cell) + "): replanned from there");
-        t.cell = x;
-        t.dispatched = false;
-        t.path.clear();
-        t.claimed = kNoCell;
-        need_resync = true;
-      } else {
-        if (t.claimed != x)
-          out.warnings.push_back(who(r) + " reports cell " + grid_.describe(x) +
-                                 (other >= 0 ? ", which robot " + std::to_string(other) + " holds"
-                                             : std::string(", more than one move from where it was")) +
-                                 ": an obstacle at " + grid_.describe(t.cell) + " and " + grid_.describe(x));
-        t.claimed = x;
-        h = RobotHealth::kInconsistent;
-      }
-    }
-    const bool unknown = rec.moving && !t.dispatched;
-    if (unknown && !t.unknown_move)
-      out.warnings.push_back(who(r) + " is moving without a command: an obstacle around " + grid_.describe(t.cell));
-    if (unknown != t.unknown_move) need_resync = true;
-    t.unknown_move = unknown;
-    if (unknown) h = RobotHealth::kInconsistent;
-    if (h != t.health) {
-      if (h != RobotHealth::kOk) {
-        if (h == RobotHealth::kOffline)
-          out.warnings.push_back(who(r) + " is offline: an obstacle at " + grid_.describe(t.cell));
-      } else {
-        out.warnings.push_back(who(r) + " is back (" + robot_health_name(t.health) + " before)");
-      }
-      t.health = h;
-      need_resync = true;
-    }
+    tracks_[r].reported_moving = rec.moving;
+    if (!tracks_[r].active) need_resync |= place(r, rec, out);  // its first report, or it could not be placed before
+    else if (rec.silent) need_resync |= fall_silent(r, out);
+    else need_resync |= take_report(r, rec, out);
   }
   if (need_resync) {
     resync();
     ++out.resyncs;
   }
+}
+
+// A robot not placed yet reports: it is placed at its cell unless another robot holds that cell
+// (then it stays out, inconsistent, and the cell it claims is blocked). True when placed.
+bool Executor::place(int r, const RobotRecord& rec, TickOutput& out) {
+  Track& t = tracks_[r];
+  if (rec.silent) return false;
+  const Cell x = rec.cell;
+  const int other = holder_of(x, r);
+  if (other >= 0) {
+    if (t.health != RobotHealth::kInconsistent || t.claimed != x)
+      out.warnings.push_back(who(r) + " reports cell " + grid_.describe(x) + ", which robot " +
+                             std::to_string(other) + " holds: not planned (an obstacle there) until it reports a free cell");
+    t.health = RobotHealth::kInconsistent;
+    t.claimed = x;
+    return false;
+  }
+  t = Track{};
+  t.reported_moving = rec.moving;
+  t.active = true;
+  t.cell = x;
+  t.unknown_move = rec.moving;
+  t.health = rec.moving ? RobotHealth::kInconsistent : rec.reported_offline ? RobotHealth::kOffline : RobotHealth::kOk;
+  if (rec.moving) out.warnings.push_back(who(r) + " first reports while moving: an obstacle until it stops");
+  return true;
+}
+
+// No news from a placed robot: it stays where we know it is, and what it may be entering stays
+// held. True when it just fell silent.
+bool Executor::fall_silent(int r, TickOutput& out) {
+  Track& t = tracks_[r];
+  if (t.health == RobotHealth::kSilent) return false;
+  out.warnings.push_back(who(r) + " is silent: an obstacle at " + grid_.describe(t.cell) +
+                         (t.dispatched ? " and " + grid_.describe(t.path.front()) : std::string()));
+  t.health = RobotHealth::kSilent;
+  return true;
+}
+
+// A placed robot's report: at rest or moving in its cell, arrived in its dispatched cell, or in a
+// cell it was not commanded into; then its health. True when the commitments need a resync.
+bool Executor::take_report(int r, const RobotRecord& rec, TickOutput& out) {
+  Track& t = tracks_[r];
+  const Cell x = rec.cell;
+  bool need_resync = false;
+  RobotHealth h = rec.reported_offline ? RobotHealth::kOffline : RobotHealth::kOk;
+  if (x == t.cell) {
+    t.claimed = kNoCell;
+    if (t.dispatched && rec.reported_offline && !rec.moving) {  // OFFLINE at rest: it will not make the move
+      t.dispatched = false;
+      t.path.clear();
+      need_resync = true;
+    }
+  } else if (t.dispatched && x == t.path.front()) {
+    arrive(r);
+  } else if (take_unexpected_cell(r, x, out)) {
+    need_resync = true;
+  } else {
+    h = RobotHealth::kInconsistent;
+  }
+  const bool unknown = rec.moving && !t.dispatched;
+  if (unknown && !t.unknown_move)
+    out.warnings.push_back(who(r) + " is moving without a command: an obstacle around " + grid_.describe(t.cell));
+  if (unknown != t.unknown_move) need_resync = true;
+  t.unknown_move = unknown;
+  if (unknown) h = RobotHealth::kInconsistent;
+  return set_health(r, h, out) || need_resync;
+}
+
+// Robot r reports cell x, which it was not commanded into. A slip (it ended in a free neighbour of
+// the cell it was in) is taken as the truth (true: replanned from there); a cell another robot
+// holds, or a jump, is not (false): the robot is an obstacle at both cells.
+bool Executor::take_unexpected_cell(int r, Cell x, TickOutput& out) {
+  Track& t = tracks_[r];
+  const int other = holder_of(x, r);
+  const bool reachable = grid_.step_allowed(t.cell, x);  // one move from where it was
+  // A robot that already claimed this very cell while another robot held it is not believed
+  // now that the cell is free: the same report stays inconsistent.
+  const bool same_claim = t.health == RobotHealth::kInconsistent && t.claimed == x;
+  if (other < 0 && reachable && !same_claim) {
+    out.warnings.push_back(who(r) + " reports " + grid_.describe(x) + ", not the cell it was commanded (" +
+                           grid_.describe(t.dispatched ? t.path.front() : t.cell) + "): replanned from there");
+    t.cell = x;
+    t.dispatched = false;
+    t.path.clear();
+    t.claimed = kNoCell;
+    return true;
+  }
+  if (t.claimed != x)
+    out.warnings.push_back(who(r) + " reports cell " + grid_.describe(x) +
+                           (other >= 0 ? ", which robot " + std::to_string(other) + " holds"
+                                       : std::string(", more than one move from where it was")) +
+                           ": an obstacle at " + grid_.describe(t.cell) + " and " + grid_.describe(x));
+  t.claimed = x;
+  return false;
+}
+
+// Robot r's health becomes h (warned when it changes). True when it changed.
+bool Executor::set_health(int r, RobotHealth h, TickOutput& out) {
+  Track& t = tracks_[r];
+  if (h == t.health) return false;
+  if (h == RobotHealth::kOffline)
+    out.warnings.push_back(who(r) + " is offline: an obstacle at " + grid_.describe(t.cell));
+  else if (h == RobotHealth::kOk)
+    out.warnings.push_back(who(r) + " is back (" + robot_health_name(t.health) + " before)");
+  t.health = h;
+  return true;
 }
 
 // Robot r reports arrival in its dispatched cell: it has left its cell, which the next robot in
@@ -352,84 +377,106 @@ int hold_rotations(const std::vector<Cell>& pos, std::vector<Cell>& next, std::v
   return count;
 }
 
+// One planned step: the planner plans one more step from the committed end states, held moves
+// become waits, and the step is validated and committed.
 void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, const std::vector<uint8_t>& hold,
                                DeadlinePlanner& planner, TickOutput& out) {
+  StepInput in;
+  gather_agents(goals, hold, in, out);
+  if (in.positions.empty()) return;
+  std::vector<Cell> next = call_planner(in, planner, out);
+  commit_step(in, next, out);
+}
+
+// The planner's agents (out.robot_of_agent), with their positions, goals (out.agent_goals), who
+// is immovable, and the cells to keep them out of.
+void Executor::gather_agents(const std::vector<std::vector<Cell>>& goals, const std::vector<uint8_t>& hold,
+                             StepInput& in, TickOutput& out) const {
   std::vector<int>& robot_of = out.robot_of_agent;
   robot_of.clear();
   for (int r = 0; r < num_robots(); ++r)
     if (tracks_[r].active) robot_of.push_back(r);
   const int na = static_cast<int>(robot_of.size());
-  if (na == 0) return;
-  std::vector<Cell> positions(na), blocked, obstacles, late_cells;
-  std::vector<std::vector<Cell>>& agent_goals = out.agent_goals;
-  agent_goals.assign(na, {});
-  std::vector<uint8_t> immovable(na, 0);
+  in.positions.assign(na, kNoCell);
+  in.immovable.assign(na, 0);
+  out.agent_goals.assign(na, {});
   for (int a = 0; a < na; ++a) {
     const int r = robot_of[a];
     const Track& t = tracks_[r];
-    const bool ok = t.health == RobotHealth::kOk;
-    Cell end = t.cell;
-    if (ok && !t.path.empty()) end = t.path.back();
-    positions[a] = end;
-    if (!ok) {
-      immovable[a] = 1;
-      obstacles.push_back(t.cell);
-      add_blocked_cells(r, blocked);
-      agent_goals[a] = {t.cell};
+    if (t.health != RobotHealth::kOk) {  // an obstacle at its cell, and wherever it may be entering
+      in.positions[a] = t.cell;
+      in.immovable[a] = 1;
+      in.obstacles.push_back(t.cell);
+      add_blocked_cells(r, in.blocked);
+      out.agent_goals[a] = {t.cell};
       continue;
     }
+    const Cell end = t.path.empty() ? t.cell : t.path.back();
+    in.positions[a] = end;
     // A robot with commit_horizon moves committed and not finished (the one it is making
     // included: a robot still on its way at the next tick is late) gets no further move in
     // this step; the others plan around its end state, so no commitments pile up behind a
     // late robot.
-    immovable[a] = static_cast<int>(t.path.size()) >= cfg_.commit_horizon || on_hold(hold, r);
+    in.immovable[a] = static_cast<int>(t.path.size()) >= cfg_.commit_horizon || on_hold(hold, r);
     // Cells the planner must keep everybody out of in this step, as no robot there will leave
     // it soon: a late robot's (commanded in an earlier tick, not arrived) still fills the
     // cell it leaves, and a robot waiting for its committed move fills its cell until its
     // move is dispatched and made. Behind such a robot others would only queue: the planner
-    // routes them around (WorldView::blocked), and the hold cascade below still holds any
-    // move into them.
-    if ((t.dispatched && t.dispatched_at < ticks_) || (!t.dispatched && !t.path.empty())) late_cells.push_back(t.cell);
-    agent_goals[a] = on_hold(hold, r) ? std::vector<Cell>{end} : planner_goals(r, goals[r], end);
+    // routes them around (WorldView::blocked), and the hold cascade still holds any move into
+    // them.
+    if ((t.dispatched && t.dispatched_at < ticks_) || (!t.dispatched && !t.path.empty())) in.late_cells.push_back(t.cell);
+    out.agent_goals[a] = on_hold(hold, r) ? std::vector<Cell>{end} : planner_goals(r, goals[r], end);
   }
   for (const Track& t : tracks_)
-    if (!t.active && t.claimed != kNoCell) blocked.push_back(t.claimed);
-  obstacles.insert(obstacles.end(), blocked.begin(), blocked.end());
+    if (!t.active && t.claimed != kNoCell) in.blocked.push_back(t.claimed);
+}
+
+// The planner's step from the agents' positions, with a distance table around the bad robots'
+// cells; `in.blocked` gets the late cells (for the hold cascade). Returns each agent's next cell.
+std::vector<Cell> Executor::call_planner(StepInput& in, DeadlinePlanner& planner, TickOutput& out) {
+  std::vector<Cell>& obstacles = in.obstacles;
+  obstacles.insert(obstacles.end(), in.blocked.begin(), in.blocked.end());
   std::sort(obstacles.begin(), obstacles.end());
   obstacles.erase(std::unique(obstacles.begin(), obstacles.end()), obstacles.end());
   const gdrhcr::DistTable& dist = dist_for(obstacles);
-  blocked.insert(blocked.end(), late_cells.begin(), late_cells.end());
+  in.blocked.insert(in.blocked.end(), in.late_cells.begin(), in.late_cells.end());
 
-  std::vector<uint8_t> movers_fixed(na, 0);  // the planner's immovable agents: bad robots, full queues
-  gdrhcr::WorldView world{grid_, dist, static_cast<int>(steps_), positions, agent_goals};
-  bool any_immovable = std::any_of(immovable.begin(), immovable.end(), [](uint8_t v) { return v != 0; });
-  if (any_immovable) world.immovable = &immovable;
+  gdrhcr::WorldView world{grid_, dist, static_cast<int>(steps_), in.positions, out.agent_goals};
+  if (std::any_of(in.immovable.begin(), in.immovable.end(), [](uint8_t v) { return v != 0; }))
+    world.immovable = &in.immovable;
   // Blocked for the planner: the late and waiting robots' cells (one per robot, so no two alike)
   // no planned agent stands on (a robot committed behind a late one has its end state in the late
   // robot's cell).
   std::vector<uint8_t> is_position(grid_.num_cells(), 0);
-  for (Cell c : positions) is_position[c] = 1;
+  for (Cell c : in.positions) is_position[c] = 1;
   std::vector<Cell> planner_blocked;
-  for (Cell c : late_cells)
+  for (Cell c : in.late_cells)
     if (!is_position[c]) planner_blocked.push_back(c);
   if (!planner_blocked.empty()) world.blocked = &planner_blocked;
-  std::vector<Cell> next = positions;
+  std::vector<Cell> next = in.positions;
   out.outcome = planner.step(world, next, cfg_.plan_deadline_s, obstacle_dist_);
   out.planner_called = true;
-  std::vector<uint8_t> held = immovable;
-  hold_cascade(grid_, positions, next, held, blocked);
-  if (hold_rotations(positions, next, held) > 0) hold_cascade(grid_, positions, next, held, blocked);
+  return next;
+}
+
+// Moves of immovable robots, into held or blocked cells, and around cycles become waits; a step
+// the validator rejects becomes a wait for everybody (out.plan_error). The rest is committed: each
+// moving robot's next cell is appended to its path and to the cell's queue of visits.
+void Executor::commit_step(const StepInput& in, std::vector<Cell>& next, TickOutput& out) {
+  const std::vector<Cell>& positions = in.positions;
+  std::vector<uint8_t> held = in.immovable;
+  hold_cascade(grid_, positions, next, held, in.blocked);
+  if (hold_rotations(positions, next, held) > 0) hold_cascade(grid_, positions, next, held, in.blocked);
   if (auto violation = validator_.check(positions, next)) {
     out.plan_error = violation->describe(grid_, static_cast<int>(steps_));
     next = positions;
   }
-  for (int a = 0; a < na; ++a) out.held += held[a] != 0;
+  for (uint8_t h : held) out.held += h != 0;
   ++steps_;
-  for (int a = 0; a < na; ++a) {
-    const int r = robot_of[a];
-    Track& t = tracks_[r];
+  for (size_t a = 0; a < positions.size(); ++a) {
     if (next[a] == positions[a]) continue;
-    t.path.push_back(next[a]);
+    const int r = out.robot_of_agent[a];
+    tracks_[r].path.push_back(next[a]);
     visits_[next[a]].push_back(r);
   }
 }

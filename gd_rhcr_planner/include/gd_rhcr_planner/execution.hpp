@@ -124,7 +124,13 @@ class Executor {
     bool reported_moving = false;  // its last report said it is between two cells
   };
 
+  // The robots' reports against what the executor knows: placement, arrivals, slips, health.
   void reconcile(const std::vector<RobotRecord>& robots, TickOutput& out);
+  bool place(int r, const RobotRecord& rec, TickOutput& out);
+  bool fall_silent(int r, TickOutput& out);
+  bool take_report(int r, const RobotRecord& rec, TickOutput& out);
+  bool take_unexpected_cell(int r, Cell x, TickOutput& out);
+  bool set_health(int r, RobotHealth h, TickOutput& out);
   void resync();
   void arrive(int r);
   int revoke(int r);
@@ -137,8 +143,20 @@ class Executor {
   void add_blocked_cells(int r, std::vector<Cell>& blocked) const;
   const gdrhcr::DistTable& dist_for(const std::vector<Cell>& obstacles);
   std::vector<Cell> planner_goals(int r, const std::vector<Cell>& fleet_goals, Cell end) const;
+  // One planning step's input, per planner agent, and the cells to keep the agents out of.
+  struct StepInput {
+    std::vector<Cell> positions;     // committed end states (a bad robot: its cell)
+    std::vector<uint8_t> immovable;  // bad robots, robots with full commitments or on hold
+    std::vector<Cell> obstacles;     // bad robots' cells (the distance table routes around them)
+    std::vector<Cell> blocked;       // where bad robots may be besides (then the late cells too)
+    std::vector<Cell> late_cells;    // cells of late robots and of robots waiting on a committed move
+  };
   void plan_and_commit(const std::vector<std::vector<Cell>>& goals, const std::vector<uint8_t>& hold,
                        DeadlinePlanner& planner, TickOutput& out);
+  void gather_agents(const std::vector<std::vector<Cell>>& goals, const std::vector<uint8_t>& hold, StepInput& in,
+                     TickOutput& out) const;
+  std::vector<Cell> call_planner(StepInput& in, DeadlinePlanner& planner, TickOutput& out);
+  void commit_step(const StepInput& in, std::vector<Cell>& next, TickOutput& out);
 
   const gdrhcr::Grid& grid_;
   const gdrhcr::DistTable& dist_;
