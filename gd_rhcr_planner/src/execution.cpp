@@ -38,7 +38,7 @@ const char* robot_health_name(RobotHealth h) {
 }
 
 Executor::Executor(const gdrhcr::Grid& grid, const gdrhcr::DistTable& dist, int num_robots, ExecutorConfig cfg)
-    : grid_(grid), dist_(dist), cfg_(cfg), tracks_(num_robots), validator_(grid) {
+    : grid_(grid), dist_(dist), cfg_(cfg), tracks_(num_robots), agent_of_robot_(num_robots, -1), validator_(grid) {
   if (cfg_.commit_horizon < 1) throw gdrhcr::ParamError("~commit_horizon must be >= 1");
 }
 
@@ -109,6 +109,10 @@ bool Executor::place(int r, const RobotRecord& rec, TickOutput& out) {
   t.unknown_move = rec.moving;
   t.health = rec.moving ? RobotHealth::kInconsistent : rec.reported_offline ? RobotHealth::kOffline : RobotHealth::kOk;
   if (rec.moving) out.warnings.push_back(who(r) + " first reports while moving: an obstacle until it stops");
+  if (agent_of_robot_[r] < 0) {  // its planner agent index, for good
+    agent_of_robot_[r] = static_cast<int>(robot_of_agent_.size());
+    robot_of_agent_.push_back(r);
+  }
   return true;
 }
 
@@ -388,14 +392,12 @@ void Executor::plan_and_commit(const std::vector<std::vector<Cell>>& goals, cons
   commit_step(in, next, out);
 }
 
-// The planner's agents (out.robot_of_agent), with their positions, goals (out.agent_goals), who
-// is immovable, and the cells to keep them out of.
+// The planner's agents (out.robot_of_agent: the placed robots, each under the index it got when
+// placed), with their positions, goals (out.agent_goals), who is immovable, and the cells to keep
+// them out of.
 void Executor::gather_agents(const std::vector<std::vector<Cell>>& goals, const std::vector<uint8_t>& hold,
                              StepInput& in, TickOutput& out) const {
-  std::vector<int>& robot_of = out.robot_of_agent;
-  robot_of.clear();
-  for (int r = 0; r < num_robots(); ++r)
-    if (tracks_[r].active) robot_of.push_back(r);
+  const std::vector<int>& robot_of = out.robot_of_agent = robot_of_agent_;
   const int na = static_cast<int>(robot_of.size());
   in.positions.assign(na, kNoCell);
   in.immovable.assign(na, 0);
@@ -543,6 +545,8 @@ std::string Executor::check_invariants() const {
   for (int r = 0; r < num_robots() && err.empty(); ++r) {
     const Track& t = tracks_[r];
     if (!t.active) continue;
+    const int a = agent_of_robot_[r];
+    if (a < 0 || robot_of_agent_[a] != r) err = "robot " + std::to_string(r) + " is placed but not planner agent " + std::to_string(a);
     auto it = visits_.find(t.cell);
     if (it == visits_.end() || it->second.empty() || it->second.front() != r)
       err = "robot " + std::to_string(r) + " is not first in the queue of its cell " + grid_.describe(t.cell);

@@ -14,6 +14,7 @@
 #include "gd_rhcr_planner/delayed_fleet.hpp"
 #include "gd_rhcr_planner/execution.hpp"
 #include "gd_rhcr_planner/map_loader.hpp"
+#include "gdrhcr/pibt.hpp"
 #include "gdrhcr/planner.hpp"
 
 using namespace gd_rhcr_planner;
@@ -34,6 +35,22 @@ class FnPlanner : public gdrhcr::Planner {
     return {true, 0};
   }
   nlohmann::json params() const override { return nlohmann::json::object(); }
+};
+
+// PIBT's step function as a planner, with its per-agent priorities in view.
+class PibtStepPlanner : public gdrhcr::Planner {
+ public:
+  PibtStepPlanner(const Grid& g, int n) : step_(g, n, 1) {}
+  std::string name() const override { return "pibt-step"; }
+  gdrhcr::StepReport plan_step(const gdrhcr::WorldView& w, std::vector<Cell>& next) override {
+    step_.step(w, next);
+    return {true, 0};
+  }
+  nlohmann::json params() const override { return nlohmann::json::object(); }
+  double priority(int agent) const { return step_.priority(agent); }
+
+ private:
+  gdrhcr::PibtStep step_;
 };
 
 std::unique_ptr<DeadlinePlanner> make_fn_planner(const Grid& g, int n, FnPlanner** out) {
@@ -399,6 +416,38 @@ TEST(ExecutorAdg, MovesQueuedBehindALateRobotAreTakenBackTransitively) {
   EXPECT_EQ(out.command[0], g.cell(3, 0)) << "a dispatched move is never taken back";
   EXPECT_TRUE(ex.committed(1).empty());
   EXPECT_TRUE(ex.committed(2).empty());
+}
+
+// Issue 22: a robot keeps its planner agent index, and with it the planner's state for it (here
+// its PIBT priority), when another robot joins late. Robot 0 is not on the floor for three ticks;
+// robots 1 and 2 are agents 0 and 1 and head for far goals, their priorities growing each step.
+// Then robot 0 reports: it becomes agent 2, and robot 2 is still agent 1 with its priority one
+// step higher. (Before, the planner's agents were the placed robots in id order: robot 2 became
+// agent 2 with a fresh priority, and robot 1 inherited robot 2's state.)
+TEST(ExecutorAdg, ARobotKeepsItsAgentIndexWhenAnotherJoinsLate) {
+  const Grid g = Grid::from_rows({"........", "........", "........"});
+  gdrhcr::DistTable dist(g);
+  auto pibt = std::make_unique<PibtStepPlanner>(g, 3);
+  const PibtStepPlanner& agents = *pibt;
+  gdrhcr::Params none;
+  DeadlinePlanner planner(std::move(pibt), gdrhcr::make_planner("pibt", none, g, 3, 1));
+  Executor ex(g, dist, 3, ExecutorConfig{});
+  std::vector<RobotRecord> robots{RobotRecord{}, at(g, 0, 0), at(g, 0, 2)};  // robot 0: no report yet
+  const std::vector<std::vector<Cell>> goals{{g.cell(4, 1)}, {g.cell(7, 0)}, {g.cell(7, 2)}};
+  double priority_of_robot2 = 0;
+  for (int tick = 0; tick < 4; ++tick) {
+    if (tick == 3) robots[0] = at(g, 4, 1);  // robot 0 reports, late
+    const TickOutput out = ex.tick(robots, goals, planner, true);
+    ASSERT_TRUE(out.stepped) << out.skip_reason;
+    EXPECT_EQ(ex.check_invariants(), "");
+    EXPECT_EQ(out.robot_of_agent, tick < 3 ? std::vector<int>({1, 2}) : std::vector<int>({1, 2, 0}));
+    EXPECT_EQ(ex.agent_of(2), 1);
+    EXPECT_EQ(ex.agent_of(0), tick < 3 ? -1 : 2);
+    EXPECT_NE(out.command[2], robots[2].cell) << "robot 2 heads for its goal at tick " << tick;
+    if (tick > 0) EXPECT_DOUBLE_EQ(agents.priority(1), priority_of_robot2 + 1) << "robot 2's priority at tick " << tick;
+    priority_of_robot2 = agents.priority(1);
+    for (int r : {1, 2}) robots[r].cell = out.command[r];  // arrived
+  }
 }
 
 // A robot on hold (paused, emergency stop) gets no new move and is an obstacle to the planner;

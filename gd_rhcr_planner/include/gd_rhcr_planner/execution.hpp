@@ -21,6 +21,13 @@
 // robot holds, or a move nobody commanded) becomes an immovable obstacle at its last known cell,
 // and every cell it may be entering is blocked; the other robots' undispatched commitments are
 // then rebuilt (a "resync"), so nobody waits for a robot that will not move.
+//
+// The planner's agents are the placed robots, each under one agent index for the executor's
+// lifetime, given when the robot is first placed (in robot id order: the identity when every
+// robot reports before the first step). A placed robot stays an agent whatever becomes of it (a
+// bad or late robot is an immovable agent), so the planner's per-agent state (PIBT priorities,
+// GD-RHCR's cached plans) stays with its robot; a robot with no known cell yet is no agent
+// (nothing can be planned for it) and joins with the next free index.
 #pragma once
 
 #include <cstdint>
@@ -57,7 +64,7 @@ struct TickOutput {
   std::vector<Cell> command;     // per robot id: the cell to be in or head for (kNoCell: no command)
   std::vector<Cell> end_state;   // per robot id: the end of its commitments
   std::vector<RobotHealth> health;
-  std::vector<int> robot_of_agent;  // planner agent index -> robot id (the planner sees active robots)
+  std::vector<int> robot_of_agent;  // planner agent index -> robot id (the placed robots; indices never change)
   std::vector<std::vector<Cell>> agent_goals;  // the goals the planner got, per agent
   bool planner_called = false;
   DeadlineOutcome outcome;       // of the planner call
@@ -101,6 +108,7 @@ class Executor {
   // is being made when dispatched(r).
   std::vector<Cell> committed(int r) const;
   bool dispatched(int r) const { return tracks_[r].dispatched; }
+  int agent_of(int r) const { return agent_of_robot_[r]; }  // robot r's planner agent index, -1 before it is placed
   Cell cell(int r) const { return tracks_[r].cell; }
   RobotHealth health(int r) const { return tracks_[r].health; }
   uint64_t steps() const { return steps_; }            // planned steps so far
@@ -162,6 +170,7 @@ class Executor {
   const gdrhcr::DistTable& dist_;
   ExecutorConfig cfg_;
   std::vector<Track> tracks_;
+  std::vector<int> robot_of_agent_, agent_of_robot_;  // planner agents: the placed robots, in the order placed
   std::unordered_map<Cell, std::deque<int>> visits_;  // robots that will be in a cell, in plan order
   gdrhcr::StepValidator validator_;
   std::vector<Cell> obstacle_cells_;  // the cells the current obstacle table blocks
