@@ -9,8 +9,9 @@
 namespace gdrhcr {
 
 PibtPlanner::PibtPlanner(const Grid& grid, int num_agents, uint64_t seed, PibtOptions options,
-                         const LocalGuidanceConfig* guidance, const MotionForecastConfig* forecast)
-    : seed_(seed), pibt_(grid, num_agents, seed, options) {
+                         const LocalGuidanceConfig* guidance, const MotionForecastConfig* forecast,
+                         ActionModel model)
+    : seed_(seed), model_(model), pibt_(grid, num_agents, seed, options) {
   if (guidance) guidance_ = std::make_unique<LocalGuidance>(grid, num_agents, *guidance);
   if (guidance && forecast && forecast->steps >= 2)
     forecast_ = std::make_unique<MotionForecast>(grid, num_agents, *forecast, *guidance);
@@ -21,6 +22,7 @@ PibtPlanner::~PibtPlanner() = default;
 nlohmann::json PibtPlanner::params() const {
   const auto& o = pibt_.options();
   nlohmann::json p = {{"seed", seed_},
+                      {"action_model", action_model_name(model_)},
                       {"priority_reset", o.priority_reset},
                       {"swap", o.swap},
                       {"tie_break", o.tie_break == PibtOptions::TieBreak::kFreeFirst ? "free-first" : "random"},
@@ -51,7 +53,7 @@ std::vector<Cell> PibtPlanner::planned_path(int agent) const {
 }
 
 StepReport PibtPlanner::plan_step(const WorldView& world, std::vector<Cell>& next) {
-  check_action_model(name(), ActionModel::kMapf, world);
+  check_action_model(name(), model_, world);
   const auto t0 = std::chrono::steady_clock::now();
   now_ = world.timestep;
   if (guidance_) {

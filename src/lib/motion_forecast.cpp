@@ -87,6 +87,7 @@ void MotionForecast::roll(const WorldView& world, const std::vector<Cell>& next,
   in_set_.assign(n, 0);
   for (int i : agents) in_set_[i] = 1;
   pos_ = next;
+  if (world.rotation()) heads_ = *world.next_headings, next_heads_ = heads_;
   moves_.assign(n, kNoCell);
   preferred_.assign(n, kNoCell);
   start_rollout(world, guidance, fixed);
@@ -96,6 +97,11 @@ void MotionForecast::roll(const WorldView& world, const std::vector<Cell>& next,
     const int t = world.timestep + k;
     fix_others(k, next, fixed);
     WorldView view{world.grid, world.dist, t, pos_, world.goals, world.immovable, world.blocked};
+    if (world.rotation()) {
+      view.action_model = ActionModel::kRotation;
+      view.headings = &heads_;
+      view.next_headings = &next_heads_;
+    }
     order_ = agents;  // guidance in priority order, as the real update
     std::stable_sort(order_.begin(), order_.end(),
                      [&](int a, int b) { return pibt_->priority(a) > pibt_->priority(b); });
@@ -103,6 +109,8 @@ void MotionForecast::roll(const WorldView& world, const std::vector<Cell>& next,
     for (int i : agents) preferred_[i] = guide_->next_cell(i, t, pos_[i]);
     pibt_->step(view, moves_, agents, fixed_moves_, &preferred_);
     for (int i : agents) pos_[i] = moves_[i], path_[i].push_back(moves_[i]);
+    if (world.rotation())
+      for (int i : agents) heads_[i] = next_heads_[i];
   }
 }
 

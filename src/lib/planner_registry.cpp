@@ -47,15 +47,15 @@ MotionForecastConfig forecast_config(const PlannerParams& v) {
   return c;
 }
 
-std::unique_ptr<Planner> make_pibt(const PlannerParams& v, const Grid& grid, int n, uint64_t seed) {
+std::unique_ptr<Planner> make_pibt(const PlannerParams& v, const Grid& grid, int n, uint64_t seed, ActionModel m) {
   const PibtOptions o = pibt_options(v);
-  if (v.text("guidance") != "local") return std::make_unique<PibtPlanner>(grid, n, seed, o);
+  if (v.text("guidance") != "local") return std::make_unique<PibtPlanner>(grid, n, seed, o, nullptr, nullptr, m);
   const LocalGuidanceConfig lg = guidance_config(v, seed);
   const MotionForecastConfig forecast = forecast_config(v);
-  return std::make_unique<PibtPlanner>(grid, n, seed, o, &lg, &forecast);
+  return std::make_unique<PibtPlanner>(grid, n, seed, o, &lg, &forecast, m);
 }
 
-std::unique_ptr<Planner> make_rhcr(const PlannerParams& v, const Grid& grid, int n, uint64_t seed) {
+std::unique_ptr<Planner> make_rhcr(const PlannerParams& v, const Grid& grid, int n, uint64_t seed, ActionModel) {
   RhcrConfig c;
   c.H = v.integer("H");
   c.alpha = v.integer("alpha");
@@ -64,14 +64,19 @@ std::unique_ptr<Planner> make_rhcr(const PlannerParams& v, const Grid& grid, int
   return std::make_unique<RhcrPlanner>(grid, n, seed, c);
 }
 
-std::unique_ptr<Planner> make_gd_rhcr(const PlannerParams& v, const Grid& grid, int n, uint64_t seed) {
+std::unique_ptr<Planner> make_gd_rhcr(const PlannerParams& v, const Grid& grid, int n, uint64_t seed, ActionModel) {
   return std::make_unique<GdRhcrPlanner>(grid, n, seed, gd_rhcr_config(v, seed));
 }
 
-using Factory = std::unique_ptr<Planner> (*)(const PlannerParams&, const Grid&, int, uint64_t);
-const std::vector<std::pair<std::string, Factory>>& registry() {
-  static const std::vector<std::pair<std::string, Factory>> planners = {
-      {"pibt", make_pibt}, {"rhcr", make_rhcr}, {"gd-rhcr", make_gd_rhcr}};
+using Factory = std::unique_ptr<Planner> (*)(const PlannerParams&, const Grid&, int, uint64_t, ActionModel);
+struct Entry {
+  std::string name;
+  Factory factory;
+  bool rotation;  // plans in the rotation action model
+};
+const std::vector<Entry>& registry() {
+  static const std::vector<Entry> planners = {
+      {"pibt", make_pibt, true}, {"rhcr", make_rhcr, false}, {"gd-rhcr", make_gd_rhcr, false}};
   return planners;
 }
 
@@ -99,13 +104,14 @@ GdRhcrConfig gd_rhcr_config(const PlannerParams& v, uint64_t seed) {
 
 std::vector<std::string> planner_names() {
   std::vector<std::string> names;
-  for (auto& [name, f] : registry()) names.push_back(name);
+  for (auto& e : registry()) names.push_back(e.name);
   return names;
 }
 
 bool planner_supports(const std::string& name, ActionModel model) {
-  (void)name;
-  return model == ActionModel::kMapf;
+  for (auto& e : registry())
+    if (e.name == name) return model == ActionModel::kMapf || e.rotation;
+  return false;
 }
 
 void check_action_model(const std::string& planner, ActionModel built, const WorldView& world) {
@@ -119,12 +125,12 @@ void check_action_model(const std::string& planner, ActionModel built, const Wor
 
 std::unique_ptr<Planner> make_planner(const PlannerParams& values, const Grid& grid, int num_agents,
                                       uint64_t seed, ActionModel model) {
-  for (auto& [name, factory] : registry()) {
-    if (name != values.planner()) continue;
-    if (!planner_supports(name, model))
-      throw ParamError("planner '" + name + "' does not plan in the " + action_model_name(model) +
+  for (auto& e : registry()) {
+    if (e.name != values.planner()) continue;
+    if (!planner_supports(e.name, model))
+      throw ParamError("planner '" + e.name + "' does not plan in the " + action_model_name(model) +
                        " action model (yet); use --action-model mapf or another planner");
-    return factory(values, grid, num_agents, seed);
+    return e.factory(values, grid, num_agents, seed, model);
   }
   throw ParamError("unknown planner '" + values.planner() + "'");
 }

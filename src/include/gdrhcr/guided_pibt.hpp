@@ -15,10 +15,14 @@ namespace gdrhcr {
 
 // PIBT over all agents, optionally following local guidance paths (local_guidance.hpp), planned
 // around the agents' motion forecast when `forecast` has steps >= 2 (motion_forecast.hpp).
+// In the rotation model (pibt.hpp) the guidance paths stay in cells (their distances from the
+// rotation rows, least over headings); the next cell of an agent's path makes the action that
+// goes or turns towards it PIBT's first choice.
 class PibtPlanner : public Planner {
  public:
   PibtPlanner(const Grid& grid, int num_agents, uint64_t seed, PibtOptions options = {},
-              const LocalGuidanceConfig* guidance = nullptr, const MotionForecastConfig* forecast = nullptr);
+              const LocalGuidanceConfig* guidance = nullptr, const MotionForecastConfig* forecast = nullptr,
+              ActionModel model = ActionModel::kMapf);
   ~PibtPlanner() override;
   std::string name() const override { return "pibt"; }
   StepReport plan_step(const WorldView& world, std::vector<Cell>& next) override;
@@ -28,6 +32,7 @@ class PibtPlanner : public Planner {
 
  private:
   uint64_t seed_;
+  ActionModel model_;
   PibtStep pibt_;
   std::unique_ptr<LocalGuidance> guidance_;
   std::unique_ptr<MotionForecast> forecast_;

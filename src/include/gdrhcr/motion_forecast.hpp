@@ -18,7 +18,9 @@
 // in the guidance table, unless the forecast never moves (planned around as parked, a parked
 // agent stays parked: it keeps its last path); agents with a new goal get none. The update then
 // replans every agent in priority order as usual, each against the new paths of the agents
-// before it and the forecasts of those after it.
+// before it and the forecasts of those after it. In the rotation model the rollout carries the
+// agents' headings from the step's next headings (WorldView::next_headings) and its PIBT copy
+// plans in that model.
 #pragma once
 
 #include <chrono>
@@ -79,6 +81,7 @@ class MotionForecast {
   std::vector<uint8_t> in_set_;
   std::vector<int> order_;
   std::vector<Cell> pos_, moves_, preferred_;
+  std::vector<Heading> heads_, next_heads_;  // rotation: the rollout's headings
   std::vector<std::pair<Cell, Cell>> fixed_moves_;
 };
 

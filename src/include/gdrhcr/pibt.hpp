@@ -13,6 +13,22 @@
 // pusher can only shove the other back). When the cell an agent wants is held by an agent that
 // needs to get past it, and a junction where they can pass is reachable, the agent walks away
 // from its goal and pulls the other one after it, until they reach the junction and pass.
+//
+// Rotation model (issue 23, LoRR's MAPF_T; action_model.hpp): PIBT over (cell, heading) states.
+// An agent's candidates are its actions: forward (F) into the cell it faces, a quarter turn either
+// way (R, C) or a wait (W), ordered by the distance to its goal from the state each leads to
+// (DistRow::at, turns counted). Only F leaves the cell, so an agent that turns or waits keeps its
+// cell for t+1, and priority inheritance sees it: an agent pushed out of its cell can vacate it
+// only by F into the cell it faces (never into its pusher's cell). When it cannot (it faces a wall,
+// an obstacle, its pusher or a cell it cannot clear), the push fails at once, the pusher tries its
+// next action, and the pushed agent turns towards its best way out (the free neighbour nearest its
+// own goal, not the pusher's cell). Giving way then takes more than one step, so the push is kept
+// as a short operation (turn, [turn,] forward; after EPIBT's multi-step operations, Nagorny, LoRR
+// 2024 winner, arXiv 2511.09193): until it has left its cell or the operation's steps are over, the
+// pushed agent keeps the pusher's priority when that is higher and prefers the operation's next
+// action over its own way. Without that it turns back towards its goal at the next step, in front
+// of the same pusher, for ever. Swap emulation is off in this model (its pull needs a sideways
+// move).
 #pragma once
 
 #include <random>
@@ -64,6 +80,22 @@ class PibtStep {
 
  private:
   bool push(const WorldView& world, int ai, int aj, std::vector<Cell>& next);
+  // Rotation model (see above).
+  bool push_rotation(const WorldView& world, int ai, int aj, std::vector<Cell>& next);
+  bool try_forward(const WorldView& world, int ai, int aj, std::vector<Cell>& next);
+  void stay(const WorldView& world, int ai, Heading h, std::vector<Cell>& next);
+  int order_actions(const WorldView& world, int ai, Action* acts);
+  Heading way_out(const WorldView& world, int ai, int pusher);
+  double effective_priority(const WorldView& world, int i) const;
+  // Rotation: an agent giving way (see above): where it stands, the heading it leaves by, the
+  // priority it inherited and the last timestep of the operation.
+  struct GiveWay {
+    Cell at = kNoCell;
+    Heading toward = kNoHeading;
+    double priority = 0;
+    int until = -1;
+  };
+  std::vector<GiveWay> give_way_;
   void order_candidates(int ai, Cell* cand, int m);
   int swap_partner(const WorldView& world, int ai, Cell best) const;
   bool needs_swap(Cell pusher_at, Cell puller_at, const DistRow& pusher_row,
@@ -85,6 +117,7 @@ class PibtStep {
   std::vector<Cell> goal_of_;                         // each agent's goal, this step
   const std::vector<Cell>* preferred_ = nullptr;
   const std::vector<uint8_t>* immovable_ = nullptr;
+  std::vector<Heading>* next_headings_ = nullptr;  // rotation: the call's output headings
   std::vector<int> order_;
   long swaps_ = 0;
 };
