@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "gd_rhcr_planner/delayed_fleet.hpp"
+#include "delayed_fleet.hpp"
 #include "gd_rhcr_planner/execution.hpp"
 #include "gd_rhcr_planner/map_loader.hpp"
 #include "gdrhcr/params.hpp"

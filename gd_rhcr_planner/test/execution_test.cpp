@@ -11,7 +11,7 @@
 #include <memory>
 #include <random>
 
-#include "gd_rhcr_planner/delayed_fleet.hpp"
+#include "delayed_fleet.hpp"
 #include "gd_rhcr_planner/execution.hpp"
 #include "gd_rhcr_planner/map_loader.hpp"
 #include "gdrhcr/pibt.hpp"

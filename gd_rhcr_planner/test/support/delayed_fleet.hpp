@@ -4,7 +4,8 @@
 // tick with probability p_delay and lasts a uniform 1..D ticks; a robot at rest does not start its
 // move, a moving robot stops where it is). Used by execution_test.cpp (any delay pattern: no
 // collision, no deadlock) and bench/delay_benchmark.cpp (throughput with and without delays).
-// fleet_sim (the ROS simulator) models the same robots over topics.
+// fleet_sim (the ROS simulator) models the same robots over topics. Test and benchmark support
+// (library gd_rhcr_fleet_testing), not part of the node.
 #pragma once
 
 #include <cstdint>

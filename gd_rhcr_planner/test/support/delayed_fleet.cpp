@@ -1,5 +1,5 @@
 // Simulated delayed robots for execution tests and benchmarks; see delayed_fleet.hpp.
-#include "gd_rhcr_planner/delayed_fleet.hpp"
+#include "delayed_fleet.hpp"
 
 #include <algorithm>
 #include <unordered_map>
