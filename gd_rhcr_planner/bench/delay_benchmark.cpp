@@ -8,6 +8,7 @@
 //   delay_benchmark --map maps/warehouse-10-20-10-2-1.map --robots 300 --ticks 300 --p-delay 0.01
 //       --max-delay 20 --planner gd-rhcr --speed 6 --seeds 1 --commit-horizon 2
 //       --between 1 [--param key=value ...]   (planner parameters, e.g. --param guidance=none)
+// --help lists the options with their defaults and ranges; a bad value is an error naming it.
 // --between 1 (default): moves are dispatched the moment the robots ahead have left (the node's
 // dispatch timer, Executor::advance after every substep); 0: at ticks only. --revoke 1 (default):
 // moves queued behind late robots are taken back and planned again (ExecutorConfig); 0: kept.
@@ -18,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_options.hpp"
 #include "delayed_fleet.hpp"
 #include "gd_rhcr_planner/execution.hpp"
 #include "gd_rhcr_planner/map_loader.hpp"
@@ -85,66 +87,92 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
   return r;
 }
 
+// The options from the command line; throws BenchOptionError naming a bad one.
+Options read_options(const BenchOptions& cl) {
+  Options o;
+  o.map = cl.text("map", o.map);
+  o.planner = cl.text("planner", o.planner);
+  o.robots = static_cast<int>(cl.integer("robots", o.robots, 1, 1000000));
+  o.ticks = static_cast<int>(cl.integer("ticks", o.ticks, 1, 10000000));
+  o.p_delay = cl.real("p-delay", o.p_delay, 0, 1);
+  o.max_delay = static_cast<int>(cl.integer("max-delay", o.max_delay, 1, 1000000));
+  o.speed = static_cast<int>(cl.integer("speed", o.speed, 1, SimRobot::kSub));
+  o.seeds = static_cast<int>(cl.integer("seeds", o.seeds, 1, 1000000));
+  o.commit_horizon = static_cast<int>(cl.integer("commit-horizon", o.commit_horizon, 1, 1000));
+  o.between = static_cast<int>(cl.integer("between", o.between, 0, 1));
+  o.revoke = static_cast<int>(cl.integer("revoke", o.revoke, 0, 1));
+  for (const std::string& kv : cl.all("param")) {
+    const size_t eq = kv.find('=');
+    if (eq == std::string::npos || eq == 0) throw BenchOptionError("--param must be key=value, not '" + kv + "'");
+    o.params.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
+  }
+  return o;
+}
+
+void print_usage() {
+  const Options d;
+  std::printf(
+      "delay_benchmark: the ADG execution layer and a planner drive simulated robots with random delays,\n"
+      "once without and once with delays; prints goals per tick and their ratio.\n"
+      "  --map PATH            map (%s)\n"
+      "  --planner NAME        planner (%s)\n"
+      "  --robots N            robots, 1.. the map's free cells (%d)\n"
+      "  --ticks N             ticks per run (%d)\n"
+      "  --p-delay P           probability per robot and tick that a delay starts, in [0, 1] (%g)\n"
+      "  --max-delay D         delays last 1..D ticks (%d)\n"
+      "  --speed S             substeps of a tick per move, 1..%d (%d)\n"
+      "  --seeds N             seeds 1..N (%d)\n"
+      "  --commit-horizon H    moves a robot may have committed and not finished, >= 1 (%d)\n"
+      "  --between 0|1         dispatch on arrival between ticks (%d)\n"
+      "  --revoke 0|1          take back moves queued behind late robots (%d)\n"
+      "  --param key=value     a planner parameter (repeatable)\n",
+      d.map.c_str(), d.planner.c_str(), d.robots, d.ticks, d.p_delay, d.max_delay, SimRobot::kSub, d.speed, d.seeds,
+      d.commit_horizon, d.between, d.revoke);
+}
+
+// Both runs of every seed and the figures; returns the exit code.
+int run_all(const Options& o) {
+  const LoadedMap map = load_map(o.map, 1.0);
+  if (o.robots > static_cast<int>(map.grid.free_cells().size()))
+    throw BenchOptionError("--robots " + std::to_string(o.robots) + ": the map has " +
+                           std::to_string(map.grid.free_cells().size()) + " free cells");
+  std::printf("map %s, %d robots, planner %s, ADG execution (commit horizon %d, dispatch %s), %d ticks, moves take %.1f tick, "
+              "delays p %.3f per tick of 1..%d ticks, random goals\n",
+              o.map.c_str(), o.robots, o.planner.c_str(), o.commit_horizon, o.between ? "on arrival" : "at ticks", o.ticks,
+              o.speed / double(SimRobot::kSub), o.p_delay, o.max_delay);
+  std::printf("%5s %14s %14s %7s %16s %16s %12s %14s\n", "seed", "goals/tick no", "goals/tick p", "ratio",
+              "delayed robots", "waiting no / p", "held moves", "moves no / p");
+  double sum_ratio = 0;
+  for (int s = 1; s <= o.seeds; ++s) {
+    const Result a = run(map.grid, o, 0.0, s), b = run(map.grid, o, o.p_delay, s);
+    for (const Result* r : {&a, &b})
+      if (!r->error.empty()) {
+        std::printf("seed %d: %s\n", s, r->error.c_str());
+        return 1;
+      }
+    const double ta = double(a.goals) / o.ticks, tb = double(b.goals) / o.ticks;
+    sum_ratio += tb / ta;
+    std::printf("%5d %14.3f %14.3f %6.1f%% %16.1f %7.1f / %6.1f %5.1f / %4.1f %6.0f / %5.0f\n", s, ta, tb, 100 * tb / ta,
+                b.delayed, a.waiting, b.waiting, a.held, b.held, a.moves, b.moves);
+    std::fflush(stdout);
+  }
+  std::printf("mean ratio %.1f%%\n", 100 * sum_ratio / o.seeds);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  Options o;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--map") o.map = v;
-    else if (k == "--planner") o.planner = v;
-    else if (k == "--robots") o.robots = std::atoi(v.c_str());
-    else if (k == "--ticks") o.ticks = std::atoi(v.c_str());
-    else if (k == "--max-delay") o.max_delay = std::atoi(v.c_str());
-    else if (k == "--speed") o.speed = std::atoi(v.c_str());
-    else if (k == "--seeds") o.seeds = std::atoi(v.c_str());
-    else if (k == "--commit-horizon") o.commit_horizon = std::atoi(v.c_str());
-    else if (k == "--between") o.between = std::atoi(v.c_str());
-    else if (k == "--revoke") o.revoke = std::atoi(v.c_str());
-    else if (k == "--param" && v.find('=') != std::string::npos)
-      o.params.emplace_back(v.substr(0, v.find('=')), v.substr(v.find('=') + 1));
-    else if (k == "--p-delay") o.p_delay = std::atof(v.c_str());
-    else {
-      std::fprintf(stderr,
-                   "unknown option %s (--map --planner --robots --ticks --p-delay --max-delay --speed "
-                   "--seeds --commit-horizon --between 0|1 --revoke 0|1 --param key=value)\n",
-                   k.c_str());
-      return 2;
-    }
-  }
-  if (o.robots < 1 || o.ticks < 1 || o.seeds < 1 || o.max_delay < 1 || o.commit_horizon < 1 || o.speed < 1 || o.speed > SimRobot::kSub ||
-      !(o.p_delay >= 0 && o.p_delay <= 1)) {
-    std::fprintf(stderr, "--robots, --ticks, --seeds, --max-delay, --commit-horizon must be >= 1, --speed in 1..%d (substeps of a "
-                 "tick per move), --p-delay in [0, 1]\n", SimRobot::kSub);
-    return 2;
-  }
   try {
-    const LoadedMap map = load_map(o.map, 1.0);
-    std::printf("map %s, %d robots, planner %s, ADG execution (commit horizon %d, dispatch %s), %d ticks, moves take %.1f tick, "
-                "delays p %.3f per tick of 1..%d ticks, random goals\n",
-                o.map.c_str(), o.robots, o.planner.c_str(), o.commit_horizon,
-                o.between ? "on arrival" : "at ticks", o.ticks,
-                o.speed / double(SimRobot::kSub), o.p_delay, o.max_delay);
-    std::printf("%5s %14s %14s %7s %16s %16s %12s %14s\n", "seed", "goals/tick no", "goals/tick p", "ratio",
-                "delayed robots", "waiting no / p", "held moves", "moves no / p");
-    double sum_ratio = 0;
-    for (int s = 1; s <= o.seeds; ++s) {
-      const Result a = run(map.grid, o, 0.0, s), b = run(map.grid, o, o.p_delay, s);
-      for (const Result* r : {&a, &b})
-        if (!r->error.empty()) {
-          std::printf("seed %d: %s\n", s, r->error.c_str());
-          return 1;
-        }
-      const double ta = double(a.goals) / o.ticks, tb = double(b.goals) / o.ticks;
-      sum_ratio += tb / ta;
-      std::printf("%5d %14.3f %14.3f %6.1f%% %16.1f %7.1f / %6.1f %5.1f / %4.1f %6.0f / %5.0f\n", s, ta, tb, 100 * tb / ta,
-                  b.delayed, a.waiting, b.waiting, a.held, b.held, a.moves, b.moves);
-      std::fflush(stdout);
+    const BenchOptions cl(argc, argv, {"map", "planner", "robots", "ticks", "p-delay", "max-delay", "speed", "seeds",
+                                       "commit-horizon", "between", "revoke", "param"});
+    if (cl.help()) {
+      print_usage();
+      return 0;
     }
-    std::printf("mean ratio %.1f%%\n", 100 * sum_ratio / o.seeds);
+    return run_all(read_options(cl));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "delay_benchmark: %s\n", e.what());
     return 2;
   }
-  return 0;
 }

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_options.hpp"
 #include "gd_rhcr_planner/dispatcher.hpp"
 #include "gd_rhcr_planner/fleet.hpp"
 #include "gd_rhcr_planner/map_loader.hpp"
@@ -93,21 +94,21 @@ int main(int argc, char** argv) {
   std::string map_path = "maps/warehouse-10-20-10-2-1.map", planner = "pibt";
   int robots = 200, steps = 1200, seeds = 3;
   double tick_rate = 2.0;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--map") map_path = v;
-    else if (k == "--robots") robots = std::atoi(v.c_str());
-    else if (k == "--steps") steps = std::atoi(v.c_str());
-    else if (k == "--seeds") seeds = std::atoi(v.c_str());
-    else if (k == "--planner") planner = v;
-    else if (k == "--tick-rate") tick_rate = std::atof(v.c_str());
-    else {
-      std::fprintf(stderr, "unknown option %s (--map --robots --steps --seeds --planner --tick-rate)\n", k.c_str());
-      return 2;
+  try {
+    const BenchOptions cl(argc, argv, {"map", "robots", "steps", "seeds", "planner", "tick-rate"});
+    if (cl.help()) {
+      std::printf("dispatch_benchmark --map PATH (%s) --robots N (%d) --steps N (%d) --seeds N (%d) --planner NAME (%s) "
+                  "--tick-rate HZ (%g)\n", map_path.c_str(), robots, steps, seeds, planner.c_str(), tick_rate);
+      return 0;
     }
-  }
-  if (robots < 1 || steps < 1 || seeds < 1 || !(tick_rate > 0)) {
-    std::fprintf(stderr, "--robots, --steps, --seeds and --tick-rate must be positive\n");
+    map_path = cl.text("map", map_path);
+    planner = cl.text("planner", planner);
+    robots = static_cast<int>(cl.integer("robots", robots, 1, 1000000));
+    steps = static_cast<int>(cl.integer("steps", steps, 1, 10000000));
+    seeds = static_cast<int>(cl.integer("seeds", seeds, 1, 1000000));
+    tick_rate = cl.real("tick-rate", tick_rate, 1e-3, 1000);
+  } catch (const BenchOptionError& e) {
+    std::fprintf(stderr, "dispatch_benchmark: %s\n", e.what());
     return 2;
   }
   const LoadedMap map = load_map(map_path, 1.0);
