@@ -38,6 +38,7 @@ struct GdRhcrPlanner::Plan {
   int start_time = 0;
   int valid_steps = 0;
   std::vector<std::vector<Cell>> paths;
+  std::vector<std::vector<Heading>> headings;  // rotation: headings[slot][k], as paths
   std::vector<std::vector<Cell>> goals;  // the goal sequence each agent was planned with
   std::vector<uint8_t> held;             // per agent: immovable when planned (its path just stays)
 };
@@ -92,10 +93,12 @@ SoftConstraintTable& thread_soft_table(const Grid& grid) {
 }
 }  // namespace
 
-GdRhcrPlanner::GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, GdRhcrConfig config)
+GdRhcrPlanner::GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, GdRhcrConfig config,
+                             ActionModel model)
     : grid_(grid),
       seed_(seed),
       cfg_(std::move(config)),
+      model_(model),
       // The paper's K_threshold = min(floor(0.1 k), 20), floored at 2 (planner_params.cpp's rule).
       k_threshold_(cfg_.k_threshold > 0 ? cfg_.k_threshold : std::max(2, std::min(num_agents / 10, 20))),
       partition_(grid),
@@ -104,7 +107,7 @@ GdRhcrPlanner::GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, Gd
       forecast_(cfg_.guidance && cfg_.forecast.steps >= 2
                     ? std::make_unique<MotionForecast>(grid, num_agents, cfg_.forecast, cfg_.lg)
                     : nullptr),
-      validator_(grid),
+      validator_(grid, model),
       density_(grid),
       plan_of_(num_agents),
       slot_of_(num_agents, 0),
@@ -124,7 +127,7 @@ GdRhcrPlanner::~GdRhcrPlanner() = default;
 
 // Algorithm 1, one timestep.
 StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& next) {
-  check_action_model(name(), ActionModel::kMapf, world);
+  check_action_model(name(), model_, world);
   StepWork work;
   begin_step(world);
   assign_groups(world, work);        // groups, and which solver moves each (lines 3-10, 19)
@@ -141,7 +144,8 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
 void GdRhcrPlanner::begin_step(const WorldView& world) {
   now_ = world.timestep;
   budget_ = StepBudget(StepBudget::Clock::now(), cfg_.step_budget_s);
-  partition_.compute(world.positions, cfg_.V);
+  if (world.rotation()) partition_.compute(world.positions, *world.headings, cfg_.V);
+  else partition_.compute(world.positions, cfg_.V);
   if (cfg_.max_density < 1.0) density_.count(world.positions);
   index_agents(world);
   taken_cells_ = world.taken_cells();
@@ -224,6 +228,7 @@ void GdRhcrPlanner::adopt_plans(const WorldView& world, StepWork& work) {
     plan->start_time = world.timestep;
     plan->valid_steps = cfg_.H;
     plan->paths = std::move(job.result.paths);
+    plan->headings = std::move(job.result.headings);
     for (size_t s = 0; s < job.agents->size(); ++s) {
       const int i = (*job.agents)[s];
       plan->goals.push_back(world.goals[i]);
@@ -246,7 +251,9 @@ void GdRhcrPlanner::move_agents(const WorldView& world, StepWork& work, std::vec
   for (int i = 0; i < n; ++i) {
     if (work.on_secondary[i]) continue;
     const auto& path = plan_of_[i]->paths[slot_of_[i]];
-    next[i] = path[std::min<int>(t - plan_of_[i]->start_time + 1, path.size() - 1)];
+    const int k = std::min<int>(t - plan_of_[i]->start_time + 1, path.size() - 1);
+    next[i] = path[k];
+    if (world.rotation()) (*world.next_headings)[i] = plan_of_[i]->headings[slot_of_[i]][k];
   }
   if (!work.secondary.empty()) {
     const auto t0 = Clock::now();
@@ -319,6 +326,7 @@ bool GdRhcrPlanner::needs_replan(const WorldView& world, const std::vector<int>&
     if (k < 0 || k >= p->valid_steps) return true;
     const auto& path = p->paths[slot_of_[i]];
     if (k + 1 >= static_cast<int>(path.size()) || path[k] != world.positions[i]) return true;
+    if (world.rotation() && p->headings[slot_of_[i]][k] != (*world.headings)[i]) return true;
     if (world.is_immovable(i) && path[k + 1] != path[k]) return true;  // went offline since
     // Free again (a late robot arrived, an offline one came back): its plan only kept it in place.
     if (!p->held.empty() && p->held[slot_of_[i]] && !world.is_immovable(i)) return true;
@@ -397,14 +405,17 @@ void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
   if (cfg_.c_soft > 0) collect_soft_constraints(world, agents, soft);
   std::vector<Cell> starts;
   std::vector<std::vector<Cell>> goals;
+  std::vector<Heading> headings;
   for (int i : agents)
-    if (!world.is_immovable(i)) starts.push_back(world.positions[i]), goals.push_back(world.goals[i]);
+    if (!world.is_immovable(i))
+      starts.push_back(world.positions[i]), goals.push_back(world.goals[i]), headings.push_back(world.pose(i).heading);
   PbsConfig pc;
   pc.horizon = cfg_.H;
   pc.c_soft = cfg_.c_soft;
   pc.time_limit_s = cfg_.timeout_s;
   pc.node_budget = cfg_.node_budget;
   pc.blocked_cells = taken_cells_.empty() ? nullptr : &taken_cells_;
+  pc.start_headings = world.rotation() ? &headings : nullptr;
   if (budget_.solves != Clock::time_point::max()) {  // the step budget: give up if nothing is left
     const double left = std::chrono::duration<double>(budget_.solves - Clock::now()).count();
     if (left <= 0) {
@@ -420,10 +431,15 @@ void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
   job.result.time_s = std::chrono::duration<double>(Clock::now() - t_start).count();  // soft constraints included
   if (job.result.success && starts.size() != agents.size()) {  // back in group order
     std::vector<std::vector<Cell>> paths(agents.size());
-    for (size_t a = 0, k = 0; a < agents.size(); ++a)
-      paths[a] = world.is_immovable(agents[a]) ? std::vector<Cell>(cfg_.H + 1, world.positions[agents[a]])
-                                              : std::move(job.result.paths[k++]);
+    std::vector<std::vector<Heading>> heads(world.rotation() ? agents.size() : 0);
+    for (size_t a = 0, k = 0; a < agents.size(); ++a) {
+      const bool held = world.is_immovable(agents[a]);
+      if (world.rotation())
+        heads[a] = held ? std::vector<Heading>(cfg_.H + 1, world.pose(agents[a]).heading) : std::move(job.result.headings[k]);
+      paths[a] = held ? std::vector<Cell>(cfg_.H + 1, world.positions[agents[a]]) : std::move(job.result.paths[k++]);
+    }
     job.result.paths = std::move(paths);
+    job.result.headings = std::move(heads);
   }
 }
 
@@ -445,6 +461,7 @@ void GdRhcrPlanner::adopt_one_step_plans(const WorldView& world, const std::vect
       const int i = by_group[e];
       slot_of_[i] = static_cast<int>(plan->paths.size());
       plan->paths.push_back({world.positions[i], next[i]});
+      if (world.rotation()) plan->headings.push_back({(*world.headings)[i], (*world.next_headings)[i]});
       plan->goals.push_back(world.goals[i]);
       ++e;
     }
@@ -536,7 +553,7 @@ bool GdRhcrPlanner::repair_step(const WorldView& world, std::vector<Cell>& next,
   bool any = false;
   size_t last_round = 0;
   for (;;) {
-    auto v = validator_.check(world.positions, next);
+    auto v = validator_.check(world.positions, next, world.headings, world.next_headings);
     if (!v) return any;
     any = true;
     const std::vector<int> agents = repair_set(world, next, repaired, v->agent_a, v->agent_b);
@@ -553,7 +570,8 @@ bool GdRhcrPlanner::repair_step(const WorldView& world, std::vector<Cell>& next,
 }
 
 nlohmann::json GdRhcrPlanner::params() const {
-  return {{"V", cfg_.V},
+  return {{"action_model", action_model_name(model_)},
+          {"V", cfg_.V},
           {"H", cfg_.H},
           {"c_soft", cfg_.c_soft},
           {"k_threshold", k_threshold_},

@@ -39,6 +39,7 @@ void GroupPartition::compute(const std::vector<Cell>& positions, int V) {
     // distance is symmetric and the other direction is found from the smaller id.
     if (++stamp_ == 0) {  // stamp wrapped: clear the marks once
       std::fill(seen_stamp_.begin(), seen_stamp_.end(), 0);
+      std::fill(state_stamp_.begin(), state_stamp_.end(), 0);
       stamp_ = 1;
     }
     frontier_.clear();
@@ -57,8 +58,48 @@ void GroupPartition::compute(const std::vector<Cell>& positions, int V) {
     }
   }
   for (int i = 0; i < n; ++i) agent_at_[positions[i]] = -1;
+  build_groups(n);
+}
 
-  // Canonical order: iterating agents ascending makes each group's first agent its smallest.
+// Rotation: BFS of depth V over (cell, heading) states from agent i's state, linking i to every
+// agent whose cell it reaches.
+void GroupPartition::link_from_state(int i, Pose start, int V) {
+  if (++stamp_ == 0) {  // stamp wrapped: clear both kinds of marks once
+    std::fill(state_stamp_.begin(), state_stamp_.end(), 0);
+    std::fill(seen_stamp_.begin(), seen_stamp_.end(), 0);
+    stamp_ = 1;
+  }
+  state_frontier_.clear();
+  state_frontier_.push_back({start, 0});
+  state_stamp_[size_t(start.cell) * 4 + start.heading] = stamp_;
+  for (size_t head = 0; head < state_frontier_.size(); ++head) {
+    const StateStep s = state_frontier_[head];
+    const int j = agent_at_[s.pose.cell];
+    if (j >= 0 && j != i) uf_.unite(i, j);
+    if (s.d == V) continue;
+    for (Action a : {Action::kForward, Action::kClockwise, Action::kCounterClockwise}) {
+      const Pose q = apply_action(grid_, s.pose, a);
+      if (q.cell == kNoCell) continue;
+      unsigned& mark = state_stamp_[size_t(q.cell) * 4 + q.heading];
+      if (mark == stamp_) continue;
+      mark = stamp_;
+      state_frontier_.push_back({q, s.d + 1});
+    }
+  }
+}
+
+void GroupPartition::compute(const std::vector<Cell>& positions, const std::vector<Heading>& headings, int V) {
+  const int n = static_cast<int>(positions.size());
+  uf_.reset(n);
+  state_stamp_.resize(size_t(grid_.num_cells()) * 4, 0);
+  for (int i = 0; i < n; ++i) agent_at_[positions[i]] = i;
+  for (int i = 0; i < n; ++i) link_from_state(i, {positions[i], headings[i]}, V);
+  for (int i = 0; i < n; ++i) agent_at_[positions[i]] = -1;
+  build_groups(n);
+}
+
+// Canonical order: iterating agents ascending makes each group's first agent its smallest.
+void GroupPartition::build_groups(int n) {
   groups_.clear();
   group_of_.assign(n, -1);
   std::vector<int> index_of_root(n, -1);

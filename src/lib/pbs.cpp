@@ -87,11 +87,13 @@ class PbsSearch {
   PbsSearch(const Grid& grid, const DistTable& dist, const std::vector<Cell>& starts,
             const std::vector<std::vector<Cell>>& goals, const SoftConstraintTable* soft,
             const PbsConfig& cfg, Workspace& ws, Clock::time_point deadline)
-      : grid_(grid), soft_(soft), cfg_(cfg), ws_(ws), deadline_(deadline), n_(static_cast<int>(starts.size())) {
+      : grid_(grid), soft_(soft), cfg_(cfg), ws_(ws), deadline_(deadline), n_(static_cast<int>(starts.size())),
+        dist_rotation_(dist.action_model() == ActionModel::kRotation) {
     static const std::vector<Cell> kNone;
     agents_.reserve(n_);
     for (int k = 0; k < n_; ++k)
-      agents_.emplace_back(dist, starts[k], k < static_cast<int>(goals.size()) ? goals[k] : kNone, cfg.horizon);
+      agents_.emplace_back(dist, starts[k], k < static_cast<int>(goals.size()) ? goals[k] : kNone, cfg.horizon,
+                           cfg.start_headings ? (*cfg.start_headings)[k] : kEast);
     cur_.assign(n_, -1);
     lower_.assign(n_, {});
     higher_.assign(n_, {});
@@ -144,11 +146,13 @@ class PbsSearch {
   Workspace& ws_;
   Clock::time_point deadline_;
   int n_;
+  bool dist_rotation_;
   std::vector<SippAgent> agents_;
   bool cut_short_ = false;
   long sipp_calls_ = 0;
 
   std::vector<std::vector<Cell>> store_;  // every path planned, by id
+  std::vector<std::vector<Heading>> store_headings_;  // its headings (rotation; else empty)
   std::vector<double> store_cost_;
   std::vector<int> store_soft_;
   std::vector<Node> nodes_;
@@ -187,6 +191,7 @@ int PbsSearch::plan(int k) {
     return -1;
   }
   store_.push_back(std::move(r.path));
+  store_headings_.push_back(std::move(r.headings));
   store_cost_.push_back(r.cost);
   store_soft_.push_back(r.soft_conflicts);
   return static_cast<int>(store_.size()) - 1;
@@ -319,6 +324,10 @@ void PbsSearch::run(PbsResult& out) {
       for (int k = 0; k < n_; ++k) {
         out.paths[k] = path(k);
         out.soft_conflicts += store_soft_[cur_[k]];
+      }
+      if (dist_rotation_) {
+        out.headings.resize(n_);
+        for (int k = 0; k < n_; ++k) out.headings[k] = store_headings_[cur_[k]];
       }
       break;
     }

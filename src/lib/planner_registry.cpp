@@ -55,17 +55,17 @@ std::unique_ptr<Planner> make_pibt(const PlannerParams& v, const Grid& grid, int
   return std::make_unique<PibtPlanner>(grid, n, seed, o, &lg, &forecast, m);
 }
 
-std::unique_ptr<Planner> make_rhcr(const PlannerParams& v, const Grid& grid, int n, uint64_t seed, ActionModel) {
+std::unique_ptr<Planner> make_rhcr(const PlannerParams& v, const Grid& grid, int n, uint64_t seed, ActionModel m) {
   RhcrConfig c;
   c.H = v.integer("H");
   c.alpha = v.integer("alpha");
   c.timeout_s = v.real("timeout");
   c.node_budget = v.integer("node-budget");
-  return std::make_unique<RhcrPlanner>(grid, n, seed, c);
+  return std::make_unique<RhcrPlanner>(grid, n, seed, c, m);
 }
 
-std::unique_ptr<Planner> make_gd_rhcr(const PlannerParams& v, const Grid& grid, int n, uint64_t seed, ActionModel) {
-  return std::make_unique<GdRhcrPlanner>(grid, n, seed, gd_rhcr_config(v, seed));
+std::unique_ptr<Planner> make_gd_rhcr(const PlannerParams& v, const Grid& grid, int n, uint64_t seed, ActionModel m) {
+  return std::make_unique<GdRhcrPlanner>(grid, n, seed, gd_rhcr_config(v, seed), m);
 }
 
 using Factory = std::unique_ptr<Planner> (*)(const PlannerParams&, const Grid&, int, uint64_t, ActionModel);
@@ -76,7 +76,7 @@ struct Entry {
 };
 const std::vector<Entry>& registry() {
   static const std::vector<Entry> planners = {
-      {"pibt", make_pibt, true}, {"rhcr", make_rhcr, false}, {"gd-rhcr", make_gd_rhcr, false}};
+      {"pibt", make_pibt, true}, {"rhcr", make_rhcr, true}, {"gd-rhcr", make_gd_rhcr, true}};
   return planners;
 }
 

@@ -7,8 +7,8 @@
 
 namespace gdrhcr {
 
-RhcrPlanner::RhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, RhcrConfig config)
-    : seed_(seed), cfg_(config), pibt_(grid, num_agents, seed, plain_pibt()) {
+RhcrPlanner::RhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, RhcrConfig config, ActionModel model)
+    : seed_(seed), cfg_(config), model_(model), pibt_(grid, num_agents, seed, plain_pibt()) {
   if (cfg_.H < 1) throw ParamError("RHCR: H must be >= 1");
   if (cfg_.alpha < 1 || cfg_.alpha > cfg_.H) throw ParamError("RHCR: alpha must be in [1, H]");
   if (!(cfg_.timeout_s > 0)) throw ParamError("RHCR: timeout must be > 0");
@@ -24,6 +24,7 @@ bool RhcrPlanner::on_plan(const WorldView& world) const {
       for (size_t s = k + 1; s < p.size(); ++s)
         if (immovable_at[p[s]]) return false;  // runs into a robot that went offline since
     if (p[std::min<size_t>(k, p.size() - 1)] != world.positions[i]) return false;
+    if (world.rotation() && plan_heads_[i][std::min<size_t>(k, p.size() - 1)] != (*world.headings)[i]) return false;
     // A robot that went offline after the plan was made cannot make its planned moves.
     if (world.is_immovable(i) && p[std::min<size_t>(k + 1, p.size() - 1)] != world.positions[i]) return false;
   }
@@ -31,7 +32,7 @@ bool RhcrPlanner::on_plan(const WorldView& world) const {
 }
 
 StepReport RhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& next) {
-  check_action_model(name(), ActionModel::kMapf, world);
+  check_action_model(name(), model_, world);
   const int n = world.num_agents();
   StepReport report;
   now_ = world.timestep;
@@ -50,10 +51,12 @@ StepReport RhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& nex
     std::vector<int> movable;
     std::vector<Cell> starts;
     std::vector<std::vector<Cell>> goals;
+    std::vector<Heading> headings;
     for (int i = 0; i < n; ++i) {
       if (world.is_immovable(i)) continue;
       movable.push_back(i);
       starts.push_back(world.positions[i]);
+      headings.push_back(world.pose(i).heading);
       goals.push_back(world.goals[i].empty() ? std::vector<Cell>{world.positions[i]} : world.goals[i]);
     }
     PbsConfig pc;
@@ -62,6 +65,7 @@ StepReport RhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& nex
     pc.time_limit_s = cfg_.timeout_s;
     pc.node_budget = cfg_.node_budget;
     pc.blocked_cells = blocked.empty() ? nullptr : &blocked;
+    pc.start_headings = world.rotation() ? &headings : nullptr;
     PbsResult r = solve_pbs(world.grid, world.dist, starts, goals, nullptr, pc);
     ++solver_calls_;
     nodes_ += r.nodes;
@@ -75,6 +79,10 @@ StepReport RhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& nex
       for (size_t k = 0; k < movable.size(); ++k) plan_[movable[k]] = std::move(r.paths[k]);
       for (int i = 0; i < n; ++i)
         if (world.is_immovable(i)) plan_[i].assign(cfg_.H + 1, world.positions[i]);
+      plan_heads_.assign(n, {});
+      for (size_t k = 0; world.rotation() && k < movable.size(); ++k) plan_heads_[movable[k]] = std::move(r.headings[k]);
+      for (int i = 0; world.rotation() && i < n; ++i)
+        if (world.is_immovable(i)) plan_heads_[i].assign(cfg_.H + 1, world.pose(i).heading);
     } else {
       ++solver_failures_;
       if (r.timed_out) ++timeouts_;
@@ -84,6 +92,8 @@ StepReport RhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& nex
   if (have_plan_) {
     const int k = world.timestep - plan_start_;
     for (int i = 0; i < n; ++i) next[i] = plan_[i][std::min<size_t>(k + 1, plan_[i].size() - 1)];
+    for (int i = 0; world.rotation() && i < n; ++i)
+      (*world.next_headings)[i] = plan_heads_[i][std::min<size_t>(k + 1, plan_heads_[i].size() - 1)];
   } else {
     pibt_.step(world, next);
     ++fallback_steps_;
@@ -104,6 +114,7 @@ nlohmann::json RhcrPlanner::params() const {
           {"timeout", cfg_.timeout_s},
           {"node_budget", cfg_.node_budget},
           {"solver", "pbs"},
+          {"action_model", action_model_name(model_)},
           {"fallback", "pibt"},
           {"seed", seed_}};
 }

@@ -73,8 +73,8 @@ void ConstraintTable::clear() {
 // ---------------------------------------------------------------------------------------------
 // SippAgent
 
-SippAgent::SippAgent(const DistTable& dist, Cell s, const std::vector<Cell>& all_goals, int horizon)
-    : start(s) {
+SippAgent::SippAgent(const DistTable& dist, Cell s, const std::vector<Cell>& all_goals, int horizon, Heading h)
+    : start(s), heading(dist.action_model() == ActionModel::kRotation ? h : kNoHeading) {
   // Keep goals while they are reachable and could still be reached before the horizon: the
   // first goal whose earliest arrival is >= H is the last one that changes the search (later
   // ones only add a constant to the cost of every node that matters).
@@ -110,6 +110,7 @@ struct Interval {
 
 struct Node {
   Cell cell;
+  Heading heading;  // rotation; kNoHeading in mapf
   int ival;  // index into the interval arena
   int gi;    // goals visited so far
   int t;     // arrival time
@@ -154,17 +155,21 @@ struct Sipp::Impl {
   int H = 0;
   int m = 0;
 
-  int h(Cell c, int gi) const {
-    return gi < m ? (*agent->rows[gi])[c] + agent->tail[gi] : 0;
+  int h(Cell c, Heading hd, int gi) const {
+    if (gi >= m) return 0;
+    return (hd == kNoHeading ? (*agent->rows[gi])[c] : agent->rows[gi]->at(c, hd)) + agent->tail[gi];
   }
   int advance(Cell c, int gi) const {
     while (gi < m && agent->goals[gi] == c) ++gi;
     return gi;
   }
   void intervals_of(Cell c);
-  void push(Cell v, int ival, int gi, int t, int conf, int parent);
+  void push(Cell v, Heading hd, int ival, int gi, int t, int conf, int parent);
+  void expand_moves(const Node& n, int idx);
+  void expand_turns(const Node& n, int idx);
   SippResult run(const SippLimits& limits);
   void finish(int idx, SippResult& r) const;
+  void finish_rotation(int idx, SippResult& r) const;
 };
 
 void Sipp::Impl::intervals_of(Cell c) {
@@ -193,24 +198,61 @@ void Sipp::Impl::intervals_of(Cell c) {
   ival_count[c] = static_cast<int32_t>(ivals.size()) - ival_begin[c];
 }
 
-void Sipp::Impl::push(Cell v, int ival, int gi, int t, int conf, int parent) {
+void Sipp::Impl::push(Cell v, Heading hd, int ival, int gi, int t, int conf, int parent) {
   const int k = ivals[ival].k;
-  // Dominance within one (cell, interval, goal index): an earlier arrival can wait, paying k
-  // conflicts per step; it dominates if it is then no worse in conflicts.
+  // Dominance within one (cell, heading, interval, goal index): an earlier arrival can wait,
+  // paying k conflicts per step; it dominates if it is then no worse in conflicts.
   for (int l = ivals[ival].labels; l >= 0; l = nodes[l].next_label) {
     const Node& o = nodes[l];
-    if (o.dead || o.gi != gi) continue;
+    if (o.dead || o.gi != gi || o.heading != hd) continue;
     if (o.t <= t && o.conf + long(k) * (t - o.t) <= conf) return;
   }
   for (int l = ivals[ival].labels; l >= 0; l = nodes[l].next_label) {
     Node& o = nodes[l];
-    if (!o.dead && o.gi == gi && t <= o.t && conf + long(k) * (o.t - t) <= o.conf) o.dead = true;
+    if (!o.dead && o.gi == gi && o.heading == hd && t <= o.t && conf + long(k) * (o.t - t) <= o.conf) o.dead = true;
   }
   const int idx = static_cast<int>(nodes.size());
-  nodes.push_back({v, ival, gi, t, conf, parent, ivals[ival].labels, false});
+  nodes.push_back({v, hd, ival, gi, t, conf, parent, ivals[ival].labels, false});
   ivals[ival].labels = idx;
-  heap.push_back({double(t + h(v, gi)) + c_soft * conf, conf, t, idx});
+  heap.push_back({double(t + h(v, hd, gi)) + c_soft * conf, conf, t, idx});
   std::push_heap(heap.begin(), heap.end());
+}
+
+// Moves into a neighbour (mapf: any; rotation: the faced one, keeping the heading), departing at
+// any time of the node's interval that arrives inside one of the neighbour's intervals.
+void Sipp::Impl::expand_moves(const Node& n, int idx) {
+  const Interval I = ivals[n.ival];
+  const bool use_soft = soft != nullptr;
+  auto to = [&](Cell v) {
+    intervals_of(v);
+    const int b = ival_begin[v], e = b + ival_count[v];
+    for (int j = b; j < e; ++j) {
+      const Interval J = ivals[j];
+      if (J.hi < n.t + 1) continue;
+      if (J.lo > I.hi + 1) break;
+      // Depart at d (waiting in I until then), arrive at d + 1 inside J.
+      for (int d = std::max(n.t, J.lo - 1); d <= I.hi && d + 1 <= J.hi; ++d) {
+        if (hard->move_blocked(n.cell, v, d)) continue;
+        const int swaps = (use_soft && d < H) ? soft->edge_count(n.cell, v, d) : 0;
+        push(v, n.heading, j, advance(v, n.gi), d + 1, n.conf + I.k * (d - n.t) + J.k + swaps, idx);
+        // A later departure can only pay off by avoiding a soft swap.
+        if (swaps == 0) break;
+      }
+    }
+  };
+  if (n.heading == kNoHeading) {
+    for (Cell v : grid.neighbours(n.cell)) to(v);
+  } else if (const Cell v = forward_cell(grid, n.cell, n.heading); v != kNoCell) {
+    to(v);
+  }
+}
+
+// Rotation: a quarter turn either way takes one step in the same cell and interval.
+void Sipp::Impl::expand_turns(const Node& n, int idx) {
+  const Interval I = ivals[n.ival];
+  if (n.heading == kNoHeading || n.t + 1 > I.hi) return;
+  for (Heading hd : {rotate_cw(n.heading), rotate_ccw(n.heading)})
+    push(n.cell, hd, n.ival, n.gi, n.t + 1, n.conf + I.k, idx);
 }
 
 SippResult Sipp::Impl::run(const SippLimits& limits) {
@@ -219,7 +261,7 @@ SippResult Sipp::Impl::run(const SippLimits& limits) {
   intervals_of(s);
   const Interval& first = ivals[ival_begin[s]];
   if (first.lo != 0) return r;  // the start itself is taken at t = 0 by a higher-priority agent
-  push(s, ival_begin[s], advance(s, 0), 0, first.k, -1);
+  push(s, agent->heading, ival_begin[s], advance(s, 0), 0, first.k, -1);
 
   while (!heap.empty()) {
     std::pop_heap(heap.begin(), heap.end());
@@ -237,34 +279,19 @@ SippResult Sipp::Impl::run(const SippLimits& limits) {
     if ((r.expansions & 255) == 255 && std::chrono::steady_clock::now() > limits.deadline) break;
     ++r.expansions;
 
-    const bool use_soft = soft != nullptr;
-    for (Cell v : grid.neighbours(n.cell)) {
-      intervals_of(v);
-      const int b = ival_begin[v], e = b + ival_count[v];
-      for (int j = b; j < e; ++j) {
-        const Interval J = ivals[j];
-        if (J.hi < n.t + 1) continue;
-        if (J.lo > I.hi + 1) break;
-        // Depart at d (waiting in I until then), arrive at d + 1 inside J.
-        for (int d = std::max(n.t, J.lo - 1); d <= I.hi && d + 1 <= J.hi; ++d) {
-          if (hard->move_blocked(n.cell, v, d)) continue;
-          const int swaps = (use_soft && d < H) ? soft->edge_count(n.cell, v, d) : 0;
-          push(v, j, advance(v, n.gi), d + 1, n.conf + I.k * (d - n.t) + J.k + swaps, idx);
-          // A later departure can only pay off by avoiding a soft swap.
-          if (swaps == 0) break;
-        }
-      }
-    }
+    expand_moves(n, idx);
+    expand_turns(n, idx);
     // Waiting across a soft boundary into the adjoining interval of the same cell.
     const int next = n.ival + 1;
     if (I.hi != kInf && next < ival_begin[n.cell] + ival_count[n.cell] && ivals[next].lo == I.hi + 1)
-      push(n.cell, next, n.gi, I.hi + 1, n.conf + I.k * (I.hi - n.t) + ivals[next].k, idx);
+      push(n.cell, n.heading, next, n.gi, I.hi + 1, n.conf + I.k * (I.hi - n.t) + ivals[next].k, idx);
   }
   r.cut_short = !heap.empty();
   return r;
 }
 
 void Sipp::Impl::finish(int idx, SippResult& r) const {
+  if (agent->heading != kNoHeading) return finish_rotation(idx, r);
   const Node& goal = nodes[idx];
   std::vector<int> chain;
   for (int i = idx; i >= 0; i = nodes[i].parent) chain.push_back(i);
@@ -290,7 +317,44 @@ void Sipp::Impl::finish(int idx, SippResult& r) const {
   while (static_cast<int>(r.path.size()) < H + 1) r.path.push_back(r.path.back());
   r.found = true;
   r.soft_conflicts = goal.conf;
-  r.cost = double(goal.t + h(goal.cell, goal.gi)) + c_soft * goal.conf;
+  r.cost = double(goal.t + h(goal.cell, goal.heading, goal.gi)) + c_soft * goal.conf;
+}
+
+// The same with headings: a turn changes the heading in place, a wait keeps it, and past the
+// horizon the way to goals[0] follows the rotation row (forward first among equal actions).
+void Sipp::Impl::finish_rotation(int idx, SippResult& r) const {
+  const Node& goal = nodes[idx];
+  std::vector<int> chain;
+  for (int i = idx; i >= 0; i = nodes[i].parent) chain.push_back(i);
+  std::reverse(chain.begin(), chain.end());
+  r.path.assign(1, nodes[chain[0]].cell);
+  r.headings.assign(1, nodes[chain[0]].heading);
+  for (size_t i = 1; i < chain.size(); ++i) {
+    const Node& a = nodes[chain[i - 1]];
+    const Node& b = nodes[chain[i]];
+    while (static_cast<int>(r.path.size()) < b.t) r.path.push_back(a.cell), r.headings.push_back(a.heading);
+    r.path.push_back(b.cell);
+    r.headings.push_back(b.heading);
+  }
+  if (goal.gi == 0 && m > 0) {
+    const DistRow& row = *agent->rows[0];
+    Pose p{goal.cell, goal.heading};
+    for (int d = row.at(p.cell, p.heading); d > 0 && d < kUnreachable; --d) {
+      for (Action act : {Action::kForward, Action::kClockwise, Action::kCounterClockwise}) {
+        const Pose q = apply_action(grid, p, act);
+        if (q.cell != kNoCell && row.at(q.cell, q.heading) == d - 1) {
+          p = q;
+          break;
+        }
+      }
+      r.path.push_back(p.cell);
+      r.headings.push_back(p.heading);
+    }
+  }
+  while (static_cast<int>(r.path.size()) < H + 1) r.path.push_back(r.path.back()), r.headings.push_back(r.headings.back());
+  r.found = true;
+  r.soft_conflicts = goal.conf;
+  r.cost = double(goal.t + h(goal.cell, goal.heading, goal.gi)) + c_soft * goal.conf;
 }
 
 Sipp::Sipp(const Grid& grid) : impl_(std::make_unique<Impl>(grid)) {}

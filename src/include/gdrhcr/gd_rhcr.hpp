@@ -75,7 +75,11 @@ struct GroupInfo {
 
 class GdRhcrPlanner : public Planner {
  public:
-  GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, GdRhcrConfig config);
+  // In the rotation model (action_model.hpp) groups are formed with turns counted
+  // (GroupPartition), the primary solver is PBS over SIPP on (cell, heading) states, plans carry
+  // headings, and the secondary solver is PIBT in that model (pibt.hpp).
+  GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, GdRhcrConfig config,
+                ActionModel model = ActionModel::kMapf);
   ~GdRhcrPlanner() override;
 
   std::string name() const override { return "gd-rhcr"; }
@@ -125,6 +129,7 @@ class GdRhcrPlanner : public Planner {
   const Grid& grid_;
   uint64_t seed_;
   GdRhcrConfig cfg_;
+  ActionModel model_;
   int k_threshold_;
   GroupPartition partition_;
   PibtStep pibt_;

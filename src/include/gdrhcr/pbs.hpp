@@ -43,12 +43,17 @@ struct PbsConfig {
   bool backjump = true;       // skip siblings that cannot undo a dead end (see above)
   // Cells no path may use at any time of the window (immovable agents outside the call).
   const std::vector<Cell>* blocked_cells = nullptr;
+  // Rotation model (a rotation DistTable): each start's heading (null: all east). SIPP then plans
+  // over (cell, heading) states (sipp.hpp) and the result carries headings. Collisions stay on
+  // cells.
+  const std::vector<Heading>* start_headings = nullptr;
 };
 
 struct PbsResult {
   bool success = false;
   bool timed_out = false;     // cut short by the time limit or the node budget
   std::vector<std::vector<Cell>> paths;  // same order as starts; paths[k][t], size >= horizon+1
+  std::vector<std::vector<Heading>> headings;  // rotation: headings[k][t], as paths
   long nodes = 0;             // PBS nodes generated
   long sipp_calls = 0;
   int soft_conflicts = 0;     // of the returned paths with the soft table, inside the window

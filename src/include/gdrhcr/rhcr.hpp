@@ -26,7 +26,10 @@ struct RhcrConfig {
 
 class RhcrPlanner : public Planner {
  public:
-  RhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, RhcrConfig config);
+  // In the rotation model PBS plans over (cell, heading) states (pbs.hpp, sipp.hpp), the plan
+  // carries headings, and the fallback is PIBT in that model (pibt.hpp).
+  RhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, RhcrConfig config,
+              ActionModel model = ActionModel::kMapf);
   std::string name() const override { return "rhcr"; }
   // StepReport{planned = true, plan_time_s = the PBS call's time} on steps where PBS ran.
   StepReport plan_step(const WorldView& world, std::vector<Cell>& next) override;
@@ -42,8 +45,10 @@ class RhcrPlanner : public Planner {
 
   uint64_t seed_;
   RhcrConfig cfg_;
+  ActionModel model_;
   PibtStep pibt_;
   std::vector<std::vector<Cell>> plan_;  // plan_[i][k]: agent i's cell k steps after plan_start_
+  std::vector<std::vector<Heading>> plan_heads_;  // rotation: the headings of plan_
   int plan_start_ = 0;                   // timestep the plan (or the fallback period) started
   bool have_plan_ = false;               // else PIBT until plan_start_ + alpha
   bool started_ = false;

@@ -26,6 +26,13 @@
 // The heuristic is the shared DistTable (exact past the horizon, which lets the search stop at
 // the first node popped at t >= H). Goals unreachable from the start (other components) cut the
 // sequence there; with goals[0] unreachable the agent just has to park.
+//
+// Rotation model (issue 23, action_model.hpp): with a rotation DistTable the search runs over
+// (cell, heading, safe interval, goal index). From a node the agent may go forward into the cell
+// it faces (departing at any time its interval allows) or make a quarter turn, which keeps it in
+// its cell and interval for one step (paying that interval's soft count). The heuristic is the
+// rotation row's distance from the node's heading (turns counted). The result carries the heading
+// at every t beside the cell (SippResult::headings); a wait keeps the heading.
 #pragma once
 
 #include <chrono>
@@ -83,8 +90,11 @@ class ConstraintTable {
 // One agent's query: start and goal sequence with their distance rows, fetched once and reused
 // across the many low-level calls PBS makes for the same agent.
 struct SippAgent {
-  SippAgent(const DistTable& dist, Cell start, const std::vector<Cell>& goals, int horizon);
+  // `heading`: the start heading in the rotation model (ignored, and kNoHeading, in mapf).
+  SippAgent(const DistTable& dist, Cell start, const std::vector<Cell>& goals, int horizon,
+            Heading heading = kEast);
   Cell start;
+  Heading heading = kNoHeading;  // kNoHeading: the mapf model
   std::vector<Cell> goals;  // the reachable prefix of the sequence that can matter before H
   std::vector<std::shared_ptr<const DistRow>> rows;  // rows[k]: distances to goals[k]
   std::vector<int> tail;    // tail[k] = sum of distances goals[k] -> goals[k+1] -> ... -> last
@@ -100,6 +110,7 @@ struct SippResult {
   bool found = false;
   bool cut_short = false;       // stopped by the budget or the deadline
   std::vector<Cell> path;
+  std::vector<Heading> headings;  // rotation: the heading at every t (same length as path)
   double cost = 0;              // arrival time at the end of the goal sequence + c_soft * conflicts
   int soft_conflicts = 0;       // of the returned path, within the window
   long expansions = 0;
