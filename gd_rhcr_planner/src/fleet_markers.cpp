@@ -95,25 +95,25 @@ void FleetMarkers::set_stations(const std::vector<Cell>& pickups, const std::vec
   emit(stations_, drop);
 }
 
-std::string FleetMarkers::overlay_text(uint64_t tick, double per_min, size_t open, size_t queued, int groups,
-                                       double plan_time_s, const std::string& planner, const std::string& dispatcher,
-                                       const std::string& operator_state) {
-  char buf[512];
-  std::snprintf(buf, sizeof buf,
-                "tick %llu   %.1f deliveries/min   open tasks %zu (%zu queued)   groups %d   plan %.1f ms\n"
-                "planner %s   dispatcher %s   %s",
-                static_cast<unsigned long long>(tick), per_min, open, queued, groups, plan_time_s * 1e3,
-                planner.c_str(), dispatcher.c_str(), operator_state.c_str());
-  return buf;
-}
 
 visualization_msgs::MarkerArray FleetMarkers::update(const FleetView& v) {
+  std::vector<Marker> all = stations_;
+  robots_layer(v, all);
+  groups_layer(v, all);
+  paths_layer(v, all);
+  goal_lines_layer(v, all);
+  tasks_layer(v, all);
+  operator_layer(v, all);
+  labels_layer(v, all);
+  overlay_layer(v, all);
+  return changes(std::move(all));
+}
+
+// Robots: a triangle per robot pointing along its heading (the move it makes, else its last).
+void FleetMarkers::robots_layer(const FleetView& v, std::vector<Marker>& all) {
   const double res = frame_.resolution;
   const size_t n = v.pos.size();
   heading_.resize(n, M_PI / 2);
-  std::vector<Marker> all = stations_;
-
-  // Robots: a triangle per robot pointing along its heading (the move it makes, else its last).
   auto robots = base("robots", Marker::TRIANGLE_LIST);
   for (size_t r = 0; r < n; ++r) {
     auto p = point(v.pos[r], 0.3 * res);
@@ -135,38 +135,42 @@ visualization_msgs::MarkerArray FleetMarkers::update(const FleetView& v) {
     }
   }
   emit(all, robots);
+}
 
-  // Group links: each member to the nearest earlier member of its group (a spanning tree).
+// Group links: each member to the nearest earlier member of its group (a spanning tree).
+void FleetMarkers::groups_layer(const FleetView& v, std::vector<Marker>& all) const {
+  const double res = frame_.resolution;
   auto links = base("groups", Marker::LINE_LIST);
   links.scale.x = 0.12 * res;
-  {
-    std::map<int, std::vector<size_t>> members;
-    for (size_t r = 0; r < n && r < v.group_of.size(); ++r)
-      if (!(r < v.offline.size() && v.offline[r])) members[v.group_of[r]].push_back(r);
-    for (auto& [g, m] : members) {
-      if (m.size() < 2) continue;
-      auto colour = group_colour(g, 0.9f);
-      for (size_t i = 1; i < m.size(); ++i) {
-        size_t best = m[0];
-        int best_d = INT32_MAX;
-        for (size_t j = 0; j < i; ++j) {
-          const int d = std::abs(grid_.x_of(v.pos[m[i]]) - grid_.x_of(v.pos[m[j]])) +
-                        std::abs(grid_.y_of(v.pos[m[i]]) - grid_.y_of(v.pos[m[j]]));
-          if (d < best_d) best_d = d, best = m[j];
-        }
-        links.points.push_back(point(v.pos[m[i]], 0.25 * res));
-        links.points.push_back(point(v.pos[best], 0.25 * res));
-        links.colors.push_back(colour);
-        links.colors.push_back(colour);
+  std::map<int, std::vector<size_t>> members;
+  for (size_t r = 0; r < v.pos.size() && r < v.group_of.size(); ++r)
+    if (!(r < v.offline.size() && v.offline[r])) members[v.group_of[r]].push_back(r);
+  for (auto& [g, m] : members) {
+    if (m.size() < 2) continue;
+    auto colour = group_colour(g, 0.9f);
+    for (size_t i = 1; i < m.size(); ++i) {
+      size_t best = m[0];
+      int best_d = INT32_MAX;
+      for (size_t j = 0; j < i; ++j) {
+        const int d = std::abs(grid_.x_of(v.pos[m[i]]) - grid_.x_of(v.pos[m[j]])) +
+                      std::abs(grid_.y_of(v.pos[m[i]]) - grid_.y_of(v.pos[m[j]]));
+        if (d < best_d) best_d = d, best = m[j];
       }
+      links.points.push_back(point(v.pos[m[i]], 0.25 * res));
+      links.points.push_back(point(v.pos[best], 0.25 * res));
+      links.colors.push_back(colour);
+      links.colors.push_back(colour);
     }
   }
   emit(all, links);
+}
 
-  // Planned paths along the aisles; the next step when there is no path.
+// Planned paths along the aisles; the next step when there is no path.
+void FleetMarkers::paths_layer(const FleetView& v, std::vector<Marker>& all) const {
+  const double res = frame_.resolution;
   auto paths = base("paths", Marker::LINE_LIST);
   paths.scale.x = 0.1 * res;
-  for (size_t r = 0; r < n; ++r) {
+  for (size_t r = 0; r < v.pos.size(); ++r) {
     auto colour = group_colour(r < v.group_of.size() ? v.group_of[r] : int(r), 0.55f);
     std::vector<Cell> path;
     if (r < v.paths.size() && v.paths[r].size() > 1) path = v.paths[r];
@@ -180,11 +184,14 @@ visualization_msgs::MarkerArray FleetMarkers::update(const FleetView& v) {
     }
   }
   emit(all, paths);
+}
 
+void FleetMarkers::goal_lines_layer(const FleetView& v, std::vector<Marker>& all) const {
+  const double res = frame_.resolution;
   auto goal_lines = base("goal_lines", Marker::LINE_LIST);
   goal_lines.scale.x = 0.05 * res;
   if (style_.show_goal_lines)
-    for (size_t r = 0; r < n && r < v.goal.size(); ++r) {
+    for (size_t r = 0; r < v.pos.size() && r < v.goal.size(); ++r) {
       if (v.goal[r] == gdrhcr::kNoCell || v.goal[r] == v.pos[r]) continue;
       auto colour = group_colour(r < v.group_of.size() ? v.group_of[r] : int(r), 0.35f);
       goal_lines.points.push_back(point(v.pos[r], 0.3 * res));
@@ -193,8 +200,11 @@ visualization_msgs::MarkerArray FleetMarkers::update(const FleetView& v) {
       goal_lines.colors.push_back(colour);
     }
   emit(all, goal_lines);
+}
 
-  // Open tasks: pickups waiting for a robot, deliveries of loads under way.
+// Open tasks: pickups waiting for a robot, deliveries of loads under way.
+void FleetMarkers::tasks_layer(const FleetView& v, std::vector<Marker>& all) const {
+  const double res = frame_.resolution;
   auto tp = base("tasks", Marker::CUBE_LIST, 0);
   tp.scale.x = tp.scale.y = 0.8 * res;
   tp.scale.z = 0.04 * res;
@@ -206,61 +216,61 @@ visualization_msgs::MarkerArray FleetMarkers::update(const FleetView& v) {
   for (Cell c : v.task_deliveries) td.points.push_back(point(c, 0.02 * res));
   emit(all, tp);
   emit(all, td);
+}
 
-  // Operator state: paused robots framed in yellow; the whole map in red on emergency stop.
+// A closed outline through the corners (x0, y0)-(x1, y1) at height z, as LINE_LIST segments.
+static void outline(Marker& m, double x0, double y0, double x1, double y1, double z) {
+  const double xs[5] = {x0, x1, x1, x0, x0}, ys[5] = {y0, y0, y1, y1, y0};
+  for (int k = 0; k < 4; ++k) {
+    geometry_msgs::Point a, b;
+    a.x = xs[k], a.y = ys[k], b.x = xs[k + 1], b.y = ys[k + 1];
+    a.z = b.z = z;
+    m.points.push_back(a);
+    m.points.push_back(b);
+  }
+}
+
+// Operator state: paused robots framed in yellow; the whole map in red on emergency stop.
+void FleetMarkers::operator_layer(const FleetView& v, std::vector<Marker>& all) const {
+  const double res = frame_.resolution;
   auto frames = base("operator", Marker::LINE_LIST, 0);
   frames.scale.x = 0.12 * res;
   frames.color = rgba(1.0, 0.9, 0.1, 1.0);
-  auto square = [&](Marker& m, double cx, double cy, double half) {
-    const double xs[5] = {cx - half, cx + half, cx + half, cx - half, cx - half};
-    const double ys[5] = {cy - half, cy - half, cy + half, cy + half, cy - half};
-    for (int k = 0; k < 4; ++k) {
-      geometry_msgs::Point a, b;
-      a.x = xs[k], a.y = ys[k], b.x = xs[k + 1], b.y = ys[k + 1];
-      a.z = b.z = 0.35 * res;
-      m.points.push_back(a);
-      m.points.push_back(b);
-    }
-  };
   if (!v.emergency_stop)
-    for (size_t r = 0; r < n && r < v.held.size(); ++r)
+    for (size_t r = 0; r < v.pos.size() && r < v.held.size(); ++r)
       if (v.held[r]) {
-        auto p = point(v.pos[r], 0);
-        square(frames, p.x, p.y, 0.55 * res);
+        const auto p = point(v.pos[r], 0);
+        const double half = 0.55 * res;
+        outline(frames, p.x - half, p.y - half, p.x + half, p.y + half, 0.35 * res);
       }
   emit(all, frames);
   auto stop = base("operator", Marker::LINE_LIST, 1);
   stop.scale.x = 0.6 * res;
   stop.color = rgba(1.0, 0.1, 0.1, 1.0);
-  if (v.emergency_stop) {
+  if (v.emergency_stop) {  // a rectangle hugging the map
     const double w = grid_.width() * res, h = grid_.height() * res;
-    const double cx = frame_.origin_x + w / 2, cy = frame_.origin_y + h / 2;
-    const double half = std::max(w, h) / 2 + res;
-    // A rectangle hugging the map (square() makes squares; do it by hand).
-    const double x0 = cx - w / 2 - res, x1 = cx + w / 2 + res, y0 = cy - h / 2 - res, y1 = cy + h / 2 + res;
-    const double xs[5] = {x0, x1, x1, x0, x0}, ys[5] = {y0, y0, y1, y1, y0};
-    (void)half;
-    for (int k = 0; k < 4; ++k) {
-      geometry_msgs::Point a, b;
-      a.x = xs[k], a.y = ys[k], b.x = xs[k + 1], b.y = ys[k + 1];
-      stop.points.push_back(a);
-      stop.points.push_back(b);
-    }
+    outline(stop, frame_.origin_x - res, frame_.origin_y - res, frame_.origin_x + w + res, frame_.origin_y + h + res, 0);
   }
   emit(all, stop);
+}
 
-  // Labels (small fleets), one marker per robot; ids beyond the fleet are never used.
-  if (static_cast<int>(n) <= style_.label_limit)
-    for (size_t r = 0; r < n; ++r) {
-      auto label = base("labels", Marker::TEXT_VIEW_FACING, static_cast<int>(r));
-      label.pose.position = point(v.pos[r], 1.0 * res);
-      label.scale.z = 0.6 * res;
-      label.color = rgba(1, 1, 1, 1);
-      label.text = std::to_string(r);
-      all.push_back(label);
-    }
+// Labels (small fleets), one marker per robot; ids beyond the fleet are never used.
+void FleetMarkers::labels_layer(const FleetView& v, std::vector<Marker>& all) const {
+  const double res = frame_.resolution;
+  if (static_cast<int>(v.pos.size()) > style_.label_limit) return;
+  for (size_t r = 0; r < v.pos.size(); ++r) {
+    auto label = base("labels", Marker::TEXT_VIEW_FACING, static_cast<int>(r));
+    label.pose.position = point(v.pos[r], 1.0 * res);
+    label.scale.z = 0.6 * res;
+    label.color = rgba(1, 1, 1, 1);
+    label.text = std::to_string(r);
+    all.push_back(label);
+  }
+}
 
-  // The overlay: above the top edge of the map, left-aligned to its middle.
+// The overlay: above the top edge of the map, left-aligned to its middle.
+void FleetMarkers::overlay_layer(const FleetView& v, std::vector<Marker>& all) const {
+  const double res = frame_.resolution;
   auto text = base("overlay", Marker::TEXT_VIEW_FACING);
   const double w = grid_.width() * res, h = grid_.height() * res;
   text.scale.z = std::max(1.0 * res, std::min(w, h) / 22.0);
@@ -270,8 +280,9 @@ visualization_msgs::MarkerArray FleetMarkers::update(const FleetView& v) {
   text.color = v.emergency_stop ? rgba(1, 0.3, 0.3, 1) : rgba(0.95, 0.95, 0.95, 1);
   text.text = v.overlay.empty() ? " " : v.overlay;
   all.push_back(text);
+}
 
-  // Only what changed.
+visualization_msgs::MarkerArray FleetMarkers::changes(std::vector<Marker>&& all) {
   visualization_msgs::MarkerArray out;
   std::vector<std::vector<uint8_t>> bytes;
   bytes.reserve(all.size());

@@ -134,7 +134,7 @@ TEST(FleetMarkers, LayersOrientationAndOnlyChangesAreResent) {
   v.held = {0, 1};
   v.paths = {{g.cell(0, 0), g.cell(1, 0), g.cell(2, 0)}, {}};
   v.task_pickups = {g.cell(5, 0)};
-  v.overlay = FleetMarkers::overlay_text(7, 12.5, 3, 1, 1, 0.0012, "gd-rhcr", "batch", "1 robots paused");
+  v.overlay = overlay_text(7, 12.5, 3, 1, 1, 0.0012, "gd-rhcr", "batch", "1 robots paused");
   auto a = fm.update(v);
   for (const char* ns : {"robots", "groups", "paths", "goal_lines", "stations", "tasks", "operator", "labels", "overlay"})
     EXPECT_GT(count_ns(a, ns), 0) << ns;

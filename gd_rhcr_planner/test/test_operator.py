@@ -189,6 +189,18 @@ class Operator(unittest.TestCase):
         m = re.search(r"'plan_deadline': ([0-9.eE+-]+)", got.stdout)
         self.assertIsNotNone(m, got.stdout)
         self.assertLessEqual(float(m.group(1)), 0.2, "a deadline past the tick period was accepted")
+        # An unknown parameter is refused, naming it; an out-of-range planner parameter and an
+        # unknown solver are rejected by the node (checked against the parameter table), the
+        # old value kept.
+        r = dynparam("set", NODE, "V_typo", "3")
+        self.assertNotEqual(r.returncode, 0, "an unknown parameter was accepted")
+        self.assertIn("V_typo", r.stdout + r.stderr)
+        dynparam("set", NODE, "{'V': -4, 'solver': 'magic'}")
+        time.sleep(1.0)
+        got = dynparam("get", NODE).stdout
+        self.assertIn("'V': 3", got, "an out-of-range V replaced the live value")
+        self.assertIn("'solver': 'pbs'", got, "an unknown solver replaced the live one")
+        self.assertIn("V=3 ", self.w.get("stats").planner_config)
         # A valid deadline: the planner is rebuilt with the step budget that follows it.
         r = dynparam("set", NODE, "plan_deadline", "0.1")
         self.assertEqual(r.returncode, 0, r.stderr)

@@ -5,6 +5,7 @@ import contextlib
 import csv
 import io
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -240,6 +241,59 @@ class ExperimentConfigTest(unittest.TestCase):
                     canon = key.replace("_", "-") if len(key) > 1 else key
                     canon = canon.lower() if len(canon) > 1 else canon
                     self.assertIn(canon, known[planner], "%s: %s has no parameter %s" % (name, planner, key))
+
+
+class ParameterTableConsumersTest(unittest.TestCase):
+    """The README's parameter list and dynamic_reconfigure's cfg/Planner.cfg come from the
+    parameter table (as `gdrhcr_sim --help` prints it)."""
+
+    def help_rows(self):
+        out = subprocess.run([SIM, "--help"], capture_output=True, text=True, check=True).stdout
+        rows, planner = {}, None
+        for line in out.splitlines():
+            if line.startswith("--planner "):
+                planner = line.split()[1]
+                rows[planner] = {}
+            elif planner and line.startswith("  --"):
+                name, rest = line[4:].split(" ", 1)
+                rng, default = rest.split(", default ", 1)
+                rows[planner][name] = (rng, default.split(":", 1)[0])
+        return out, rows
+
+    def test_readme_parameter_list_is_the_tables(self):
+        out, _ = self.help_rows()
+        made = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "readme_params.py")], input=out,
+                              capture_output=True, text=True, check=True).stdout.strip()
+        with open(os.path.join(ROOT, "README.md")) as f:
+            readme = f.read()
+        start = readme.index("<!-- planner parameters -->")
+        end = readme.index("<!-- /planner parameters -->") + len("<!-- /planner parameters -->")
+        self.assertEqual(readme[start:end].strip(), made,
+                         "README's list is stale: build/src/gdrhcr_sim --help | python3 tools/readme_params.py")
+
+    def test_reconfigure_planner_parameters_are_the_tables(self):
+        _, rows = self.help_rows()
+        with open(os.path.join(ROOT, "gd_rhcr_planner", "cfg", "Planner.cfg")) as f:
+            cfg = f.read()
+        found = re.findall(r'planner\.add\("(\w+)", (\w+), 0, "[^"]*", ([^,]+), ([^,]+), ([^,)]+)\)', cfg)
+        self.assertEqual(sorted(f[0] for f in found), ["H", "K_threshold", "V", "c_soft"])
+        for name, _, default, lo, hi in found:
+            canon = name.replace("_", "-") if len(name) > 1 else name
+            canon = canon.lower() if len(canon) > 1 else canon
+            rng, table_default = rows["gd-rhcr"][canon]
+            tlo, thi = (float(x) for x in rng.strip("[]").split(", "))
+            if canon == "k-threshold":
+                self.assertEqual(float(default), 0, "0 = the planner's rule")
+                self.assertTrue(table_default.startswith("rule"))
+            else:
+                self.assertEqual(float(default), float(table_default), name)
+            # wider than the table's range: out-of-range values reach the node, which rejects them
+            self.assertLessEqual(float(lo), tlo, name)
+            self.assertGreaterEqual(float(hi), thi, name)
+        solver = re.search(r'planner\.add\("solver", str_t, 0, "[^"]*", "(\w+)"', cfg)
+        self.assertIsNotNone(solver)
+        self.assertEqual(solver.group(1), rows["gd-rhcr"]["solver"][1])
+        self.assertNotIn("solver2", cfg)
 
 
 if __name__ == "__main__":

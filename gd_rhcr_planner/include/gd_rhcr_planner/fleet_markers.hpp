@@ -21,6 +21,7 @@
 
 #include <visualization_msgs/MarkerArray.h>
 
+#include "gd_rhcr_planner/fleet_view.hpp"
 #include "gd_rhcr_planner/map_loader.hpp"
 #include "gdrhcr/grid.hpp"
 
@@ -30,18 +31,6 @@ struct MarkerStyle {
   std::string frame_id = "map";
   int label_limit = 60;
   bool show_goal_lines = false;
-};
-
-// One tick of the fleet as the markers show it (vectors indexed by robot id).
-struct FleetView {
-  std::vector<gdrhcr::Cell> pos, next;
-  std::vector<gdrhcr::Cell> goal;                // first goal (kNoCell or own cell: none)
-  std::vector<int> group_of;                     // group index per robot
-  std::vector<uint8_t> offline, held;            // held: paused or emergency stop
-  std::vector<std::vector<gdrhcr::Cell>> paths;  // planned paths (may be empty)
-  std::vector<gdrhcr::Cell> task_pickups, task_deliveries;  // of the open tasks
-  bool emergency_stop = false;
-  std::string overlay;                           // the text block
 };
 
 class FleetMarkers {
@@ -55,15 +44,21 @@ class FleetMarkers {
   const std::vector<visualization_msgs::Marker>& current() const { return last_; }
   const MarkerStyle& style() const { return style_; }
 
-  // Overlay text from the figures.
-  static std::string overlay_text(uint64_t tick, double deliveries_per_min, size_t open, size_t queued,
-                                  int groups, double plan_time_s, const std::string& planner,
-                                  const std::string& dispatcher, const std::string& operator_state);
-
  private:
   geometry_msgs::Point point(gdrhcr::Cell c, double z) const;
   visualization_msgs::Marker base(const std::string& ns, int type, int id = 0) const;
   void emit(std::vector<visualization_msgs::Marker>& all, visualization_msgs::Marker m) const;
+  // The layers, each appended to `all`.
+  void robots_layer(const FleetView& v, std::vector<visualization_msgs::Marker>& all);
+  void groups_layer(const FleetView& v, std::vector<visualization_msgs::Marker>& all) const;
+  void paths_layer(const FleetView& v, std::vector<visualization_msgs::Marker>& all) const;
+  void goal_lines_layer(const FleetView& v, std::vector<visualization_msgs::Marker>& all) const;
+  void tasks_layer(const FleetView& v, std::vector<visualization_msgs::Marker>& all) const;
+  void operator_layer(const FleetView& v, std::vector<visualization_msgs::Marker>& all) const;
+  void labels_layer(const FleetView& v, std::vector<visualization_msgs::Marker>& all) const;
+  void overlay_layer(const FleetView& v, std::vector<visualization_msgs::Marker>& all) const;
+  // The markers of `all` that differ from the last call's, and deletions of those gone.
+  visualization_msgs::MarkerArray changes(std::vector<visualization_msgs::Marker>&& all);
 
   const gdrhcr::Grid& grid_;
   MapFrame frame_;

@@ -25,6 +25,7 @@ class Params {
   static std::string canonical(const std::string& key);
   void set(const std::string& key, const std::string& value) { values_[canonical(key)] = value; }
   bool has(const std::string& key) const { return values_.count(canonical(key)) > 0; }
+  void erase(const std::string& key) { values_.erase(canonical(key)); }
 
   int get_int(const std::string& key, int fallback, int min, int max);
   double get_double(const std::string& key, double fallback, double min, double max);

@@ -1,0 +1,37 @@
+// Conversions between the fleet manager's plain structs (fleet_manager.hpp) and the node's ROS
+// messages and dynamic_reconfigure config. No node handle: tested without a master.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <gd_rhcr_msgs/GroupArray.h>
+#include <gd_rhcr_msgs/MapdCells.h>
+#include <gd_rhcr_msgs/PlannerStats.h>
+#include <gd_rhcr_msgs/StepCommandArray.h>
+#include <gd_rhcr_msgs/Task.h>
+#include <gd_rhcr_msgs/TaskStatus.h>
+#include <gd_rhcr_planner/PlannerConfig.h>
+#include <nav_msgs/OccupancyGrid.h>
+
+#include "gd_rhcr_planner/fleet_manager.hpp"
+#include "gd_rhcr_planner/map_loader.hpp"
+#include "gdrhcr/task_stream.hpp"
+
+namespace gd_rhcr_planner {
+
+LiveConfig live_of(const PlannerConfig& c);
+void copy_live(const LiveConfig& l, PlannerConfig& c);
+gd_rhcr_msgs::PlannerStats stats_message(const TickStats& s);
+gd_rhcr_msgs::StepCommandArray step_commands(const std::vector<RobotCommand>& commands, const LoadedMap& map,
+                                             const std::string& frame_id, uint64_t tick, double tick_period,
+                                             const ros::Time& stamp);
+gd_rhcr_msgs::GroupArray group_array(const TickResult& r, const std::string& frame_id, const ros::Time& stamp);
+// The map as an OccupancyGrid (row 0 at the bottom, REP 103) and the MAPD stations.
+nav_msgs::OccupancyGrid occupancy_grid(const LoadedMap& map, const std::string& frame_id, const ros::Time& stamp);
+gd_rhcr_msgs::MapdCells mapd_message(const gdrhcr::Grid& grid, const gdrhcr::MapdCells& mapd,
+                                     const std_msgs::Header& header);
+gd_rhcr_msgs::Task task_message(const TaskRecord& t);
+gd_rhcr_msgs::TaskStatus status_message(const TaskRecord& t);
+
+}  // namespace gd_rhcr_planner

@@ -1,0 +1,251 @@
+// FleetManager (fleet_manager.hpp), tick by tick without ROS: simulated robots that follow their
+// commands deliver tasks without ever being sent into a cell another robot stands in; parameters
+// are checked against the planner table (a misspelling is an error naming it, on construction
+// and on reconfigure, where the old value is kept); operator holds, the task journal across a
+// restart, and the node's configuration file.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+
+#include "gd_rhcr_planner/fleet_manager.hpp"
+
+using namespace gd_rhcr_planner;
+using gdrhcr::Cell;
+using gdrhcr::Grid;
+
+namespace {
+
+Grid warehouse() {
+  return Grid::from_rows({
+      "............",
+      ".@@.@@.@@.@.",
+      "............",
+      ".@@.@@.@@.@.",
+      "............",
+  });
+}
+
+FleetConfig config(const std::string& planner, int robots) {
+  FleetConfig c;
+  c.planner = planner;
+  c.num_robots = robots;
+  c.tick_rate = 10;       // ticks do not wait for the clock here; the deadline bounds a step
+  c.plan_deadline = 0.09;
+  c.offline_timeout = 1e6;
+  c.task_store = "";
+  return c;
+}
+
+// Robots that follow their commands at once: each tick they report the cell they were sent to.
+struct SimFleet {
+  FleetManager& fm;
+  std::vector<std::pair<int, int>> xy;
+  double now = 0;
+  int conflicts = 0;  // commands into a cell another robot stands in
+
+  void report() {
+    std::string err;
+    for (size_t r = 0; r < xy.size(); ++r)
+      ASSERT_TRUE(fm.update_robot(r, xy[r].first, xy[r].second, false, false, now, err)) << err;
+  }
+  void follow(const std::vector<RobotCommand>& commands) {
+    const Grid& g = fm.grid();
+    std::map<Cell, int> at;
+    for (size_t r = 0; r < xy.size(); ++r) at[g.cell(xy[r].first, xy[r].second)] = static_cast<int>(r);
+    std::set<Cell> targets;
+    for (const auto& c : commands) {
+      auto it = at.find(c.cell);
+      if (it != at.end() && it->second != c.robot) ++conflicts;
+      EXPECT_TRUE(targets.insert(c.cell).second) << "two robots sent into one cell";
+      EXPECT_TRUE(g.step_allowed(g.cell(xy[c.robot].first, xy[c.robot].second), c.cell));
+    }
+    for (const auto& c : commands) xy[c.robot] = {g.x_of(c.cell), g.y_of(c.cell)};
+  }
+  TickResult step(bool view = false) {
+    now += 0.001;
+    report();
+    TickResult r = fm.tick(now, now, view);
+    follow(r.commands);
+    report();
+    follow(fm.between_ticks());
+    return r;
+  }
+};
+
+}  // namespace
+
+TEST(FleetManager, WholeTicksDeliverTasksAndNeverSendARobotIntoAnother) {
+  const Grid g = warehouse();
+  for (const char* planner : {"pibt", "gd-rhcr", "rhcr"}) {
+    FleetManager fm(g, config(planner, 4));
+    SimFleet sim{fm, {{0, 0}, {11, 0}, {0, 4}, {11, 4}}};
+    for (int k = 0; k < 6; ++k)
+      ASSERT_TRUE(fm.submit({k % 12, 2, (11 - 2 * k) % 12, (k % 2) * 4, 0, 0}).accepted) << planner;
+    uint64_t delivered = 0;
+    for (int t = 0; t < 120; ++t) {
+      TickResult r = sim.step(t % 10 == 0);
+      ASSERT_TRUE(r.stepped) << planner << " tick " << t << ": " << r.skip_reason;
+      EXPECT_EQ(r.tick, static_cast<uint64_t>(t + 1));
+      delivered = r.stats.tasks_delivered;
+      if (t % 10 == 0) {
+        EXPECT_EQ(r.view.pos.size(), 4u);
+        EXPECT_NE(r.view.overlay.find(planner), std::string::npos);
+      }
+    }
+    EXPECT_EQ(sim.conflicts, 0) << planner;
+    EXPECT_EQ(delivered, 6u) << planner;
+    size_t delivered_events = 0;
+    for (auto& e : fm.take_events()) delivered_events += e.state == kDelivered;
+    EXPECT_EQ(delivered_events, 6u) << planner;
+    EXPECT_TRUE(fm.tasks(false).empty()) << planner;
+  }
+}
+
+TEST(FleetManager, NoStepUntilEveryRobotReportedOrTheWaitIsOver) {
+  const Grid g = warehouse();
+  FleetConfig c = config("pibt", 2);
+  c.offline_timeout = 0.5;
+  FleetManager fm(g, c);
+  std::string err;
+  ASSERT_TRUE(fm.update_robot(0, 0, 0, false, false, 0.0, err));
+  EXPECT_FALSE(fm.tick(0.1, 0.1, false).stepped) << "robot 1 never reported";
+  ASSERT_TRUE(fm.update_robot(0, 0, 0, false, false, 0.6, err));
+  const auto r = fm.tick(0.6, 0.6, false);
+  EXPECT_TRUE(r.stepped) << "after the offline timeout the reported robots move";
+  std::vector<std::pair<std::string, std::string>> values;
+  fm.diagnose(0.6, values);
+  bool told = false;
+  for (auto& [k, v] : values) told |= k == "last problem" && v.find("never reported") != std::string::npos;
+  EXPECT_TRUE(told);
+}
+
+TEST(FleetManager, UnknownOrBadPlannerParametersAreErrorsNamingThem) {
+  const Grid g = warehouse();
+  FleetConfig c = config("gd-rhcr", 2);
+  c.planner_params.set("c_sotf", "2");
+  try {
+    FleetManager fm(g, c);
+    FAIL() << "a misspelt parameter was accepted";
+  } catch (const gdrhcr::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("c-sotf"), std::string::npos) << e.what();
+  }
+  FleetConfig d = config("gd-rhcr", 2);
+  d.planner_params.set("V", "-3");
+  EXPECT_THROW(FleetManager(g, d), gdrhcr::ParamError);
+  FleetConfig p = config("no-such-planner", 2);
+  EXPECT_THROW(FleetManager(g, p), gdrhcr::ParamError);
+  FleetConfig t = config("pibt", 2);
+  t.tick_rate = 0;
+  EXPECT_THROW(FleetManager(g, t), gdrhcr::ParamError);
+}
+
+TEST(FleetManager, NodeParameterNamesAreCheckedAgainstTheTables) {
+  EXPECT_EQ(classify_node_param("tick_rate", "gd-rhcr"), NodeParamKind::kNode);
+  EXPECT_EQ(classify_node_param("V", "gd-rhcr"), NodeParamKind::kPlanner);
+  EXPECT_EQ(classify_node_param("c_soft", "gd-rhcr"), NodeParamKind::kPlanner);
+  EXPECT_EQ(classify_node_param("alpha", "gd-rhcr"), NodeParamKind::kOtherPlanner);
+  EXPECT_EQ(classify_node_param("alpha", "rhcr"), NodeParamKind::kPlanner);
+  try {
+    classify_node_param("tick_rat", "gd-rhcr");
+    FAIL() << "a misspelt node parameter was accepted";
+  } catch (const gdrhcr::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("~tick_rat"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(classify_node_param("execution", "pibt"), gdrhcr::ParamError) << "the lock-step mode is gone";
+}
+
+// config/fleet.yaml serves every planner: each key is the node's or some planner's.
+TEST(FleetManager, TheNodeConfigurationFileUsesKnownParameters) {
+  const YAML::Node yaml = YAML::LoadFile(std::string(GD_RHCR_REPO_DIR) + "/config/fleet.yaml");
+  ASSERT_TRUE(yaml.IsMap());
+  int keys = 0;
+  for (auto it = yaml.begin(); it != yaml.end(); ++it, ++keys) {
+    const std::string name = it->first.as<std::string>();
+    for (const char* planner : {"pibt", "rhcr", "gd-rhcr"})
+      EXPECT_NO_THROW(classify_node_param(name, planner)) << name;
+  }
+  EXPECT_GT(keys, 10);
+}
+
+TEST(FleetManager, ReconfigureRejectsBadValuesKeepingTheOldAndAppliesGoodOnesAtTheNextTick) {
+  const Grid g = warehouse();
+  FleetManager fm(g, config("gd-rhcr", 2));
+  SimFleet sim{fm, {{0, 0}, {11, 4}}};
+  sim.step();
+  LiveConfig c = fm.live_config();
+  const LiveConfig before = c;
+  c.solver = "magic";
+  auto errors = fm.reconfigure(c);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("solver"), std::string::npos) << errors[0];
+  EXPECT_EQ(c.solver, before.solver) << "the old value is put back";
+  c.plan_deadline = 5.0;  // longer than the tick period
+  errors = fm.reconfigure(c);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("plan_deadline"), std::string::npos);
+  EXPECT_EQ(c.plan_deadline, before.plan_deadline);
+  c.V = 3;
+  EXPECT_TRUE(fm.reconfigure(c).empty());
+  EXPECT_NE(fm.planner_config_string().find("V=2"), std::string::npos) << "applied at the next tick";
+  const auto r = sim.step();
+  EXPECT_NE(r.stats.planner_config.find("V=3"), std::string::npos) << r.stats.planner_config;
+  EXPECT_EQ(r.stats.reconfigures, 1u);
+  // PIBT has no V: the live value is ignored, not an error.
+  FleetManager pibt(g, config("pibt", 2));
+  LiveConfig p = pibt.live_config();
+  p.V = 5;
+  EXPECT_TRUE(pibt.reconfigure(p).empty());
+}
+
+TEST(FleetManager, AHeldRobotGetsNoNewMove) {
+  const Grid g = warehouse();
+  FleetManager fm(g, config("pibt", 2));
+  SimFleet sim{fm, {{0, 0}, {11, 4}}};
+  sim.step();
+  EXPECT_FALSE(fm.set_paused(7, true).empty()) << "an unknown robot is refused";
+  EXPECT_TRUE(fm.set_paused(0, true).empty());
+  ASSERT_TRUE(fm.submit({0, 2, 11, 0, 0, 0}).accepted);
+  ASSERT_TRUE(fm.submit({11, 2, 0, 4, 0, 0}).accepted);
+  for (int t = 0; t < 15; ++t) sim.step();
+  EXPECT_EQ(sim.xy[0], std::make_pair(0, 0)) << "paused robot 0 stayed";
+  EXPECT_NE(sim.xy[1], std::make_pair(11, 4)) << "robot 1 took a task";
+  fm.set_emergency_stop(true);
+  const auto frozen = sim.xy;
+  for (int t = 0; t < 5; ++t) sim.step();
+  EXPECT_EQ(sim.xy, frozen) << "nobody moves on emergency stop";
+  fm.set_emergency_stop(false);
+  EXPECT_TRUE(fm.set_paused(-1, false).empty());
+  for (int t = 0; t < 60; ++t) sim.step();
+  EXPECT_TRUE(fm.tasks(false).empty()) << "both tasks delivered after the release";
+}
+
+TEST(FleetManager, AcceptedTasksSurviveARestartThroughTheJournal) {
+  const Grid g = warehouse();
+  char path[] = "/tmp/fleet_manager_test_XXXXXX";
+  const int fd = mkstemp(path);
+  ASSERT_GE(fd, 0);
+  close(fd);
+  std::remove(path);
+  FleetConfig c = config("pibt", 2);
+  c.task_store = path;
+  uint64_t id = 0;
+  {
+    FleetManager fm(g, c);
+    auto r = fm.submit({0, 2, 11, 0, 3, 0});
+    ASSERT_TRUE(r.accepted);
+    id = r.task_id;
+    fm.take_events();  // journaled here
+  }
+  FleetManager again(g, c);
+  const auto open = again.tasks(false);
+  ASSERT_EQ(open.size(), 1u);
+  EXPECT_EQ(open[0].first, id);
+  EXPECT_EQ(open[0].second.priority, 3);
+  std::remove(path);
+}
