@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <numeric>
 #include <sstream>
 
@@ -638,6 +639,17 @@ Health FleetManager::diagnose(double wall, std::vector<std::pair<std::string, st
 }  // namespace gd_rhcr_planner
 
 namespace gd_rhcr_planner {
+
+std::string default_task_store(const std::string& node_name) {
+  std::string home;
+  if (const char* h = std::getenv("ROS_HOME")) home = h;
+  else if (const char* u = std::getenv("HOME")) home = std::string(u) + "/.ros";
+  else home = "/tmp";
+  std::string name = node_name;
+  std::replace(name.begin(), name.end(), '/', '_');
+  if (!name.empty() && name[0] == '_') name.erase(0, 1);
+  return home + "/gd_rhcr_planner/" + name + ".tasks.jsonl";
+}
 
 const std::vector<std::string>& node_param_names() {
   static const std::vector<std::string> names = {

@@ -3,7 +3,6 @@
 // structs, and wires topics, services, the Delivery action, timers, dynamic_reconfigure and
 // diagnostics. Topics, services and parameters: gd_rhcr_planner/README.md.
 #include <algorithm>
-#include <cstdlib>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -45,30 +44,6 @@ namespace {
 
 using DeliveryServer = actionlib::ActionServer<gd_rhcr_msgs::DeliveryAction>;
 
-std::string xmlrpc_to_string(XmlRpc::XmlRpcValue& v, const std::string& name) {
-  switch (v.getType()) {
-    case XmlRpc::XmlRpcValue::TypeInt: return std::to_string(static_cast<int>(v));
-    case XmlRpc::XmlRpcValue::TypeDouble: {
-      std::ostringstream s;
-      s.precision(17);
-      s << static_cast<double>(v);
-      return s.str();
-    }
-    case XmlRpc::XmlRpcValue::TypeBoolean: return static_cast<bool>(v) ? "1" : "0";
-    case XmlRpc::XmlRpcValue::TypeString: return static_cast<std::string>(v);
-    default: throw gdrhcr::ParamError("planner parameter ~" + name + " has an unsupported type");
-  }
-}
-
-void ros_log(LogLevel level, const std::string& msg) {
-  switch (level) {
-    case LogLevel::kDebug: ROS_DEBUG("%s", msg.c_str()); break;
-    case LogLevel::kInfo: ROS_INFO("%s", msg.c_str()); break;
-    case LogLevel::kWarn: ROS_WARN("%s", msg.c_str()); break;
-    case LogLevel::kError: ROS_ERROR("%s", msg.c_str()); break;
-  }
-}
-
 class PlannerNode {
  public:
   PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh), pnh_(pnh) {}
@@ -79,7 +54,6 @@ class PlannerNode {
  private:
   FleetConfig load_config();
   void read_planner_params(FleetConfig& cfg);
-  std::string default_task_store() const;
   void advertise();
   void publish_static(const gdrhcr::MapdCells& mapd);
   void on_states(const gd_rhcr_msgs::RobotStateArray::ConstPtr& msg);
@@ -153,7 +127,7 @@ FleetConfig PlannerNode::load_config() {
   pnh_.param("dispatch_switch_margin", c.dispatch.switch_margin, c.dispatch.switch_margin);
   pnh_.param("dispatch_max_tasks", c.dispatch.max_tasks, c.dispatch.max_tasks);
   pnh_.param("dispatch_age_weight", c.dispatch.age_weight, c.dispatch.age_weight);
-  if (!pnh_.getParam("task_store", c.task_store) || c.task_store == "default") c.task_store = default_task_store();
+  if (!pnh_.getParam("task_store", c.task_store) || c.task_store == "default") c.task_store = default_task_store(ros::this_node::getName());
   if (c.task_store == "none") c.task_store.clear();
   if (!(cell_size_ > 0)) throw gdrhcr::ParamError("~cell_size must be > 0 metres");
   c.validate();
@@ -182,18 +156,6 @@ void PlannerNode::read_planner_params(FleetConfig& cfg) {
     throw gdrhcr::ParamError("~planner_params must be a dictionary of the planner's parameters");
   for (auto it = extra.begin(); it != extra.end(); ++it)  // every one must be the planner's
     cfg.planner_params.set(it->first, xmlrpc_to_string(it->second, "planner_params/" + it->first));
-}
-
-// $ROS_HOME (else ~/.ros)/gd_rhcr_planner/<node name>.tasks.jsonl: one store per planner node.
-std::string PlannerNode::default_task_store() const {
-  std::string home;
-  if (const char* h = std::getenv("ROS_HOME")) home = h;
-  else if (const char* u = std::getenv("HOME")) home = std::string(u) + "/.ros";
-  else home = "/tmp";
-  std::string name = ros::this_node::getName();
-  std::replace(name.begin(), name.end(), '/', '_');
-  if (!name.empty() && name[0] == '_') name.erase(0, 1);
-  return home + "/gd_rhcr_planner/" + name + ".tasks.jsonl";
 }
 
 void PlannerNode::init() {

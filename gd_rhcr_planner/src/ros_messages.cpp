@@ -1,7 +1,35 @@
 // Conversions between the fleet manager's structs and ROS messages (ros_messages.hpp).
 #include "gd_rhcr_planner/ros_messages.hpp"
 
+#include <sstream>
+
+#include <ros/console.h>
+
 namespace gd_rhcr_planner {
+
+std::string xmlrpc_to_string(XmlRpc::XmlRpcValue& v, const std::string& name) {
+  switch (v.getType()) {
+    case XmlRpc::XmlRpcValue::TypeInt: return std::to_string(static_cast<int>(v));
+    case XmlRpc::XmlRpcValue::TypeDouble: {
+      std::ostringstream s;
+      s.precision(17);
+      s << static_cast<double>(v);
+      return s.str();
+    }
+    case XmlRpc::XmlRpcValue::TypeBoolean: return static_cast<bool>(v) ? "1" : "0";
+    case XmlRpc::XmlRpcValue::TypeString: return static_cast<std::string>(v);
+    default: throw gdrhcr::ParamError("planner parameter ~" + name + " has an unsupported type");
+  }
+}
+
+void ros_log(LogLevel level, const std::string& msg) {
+  switch (level) {
+    case LogLevel::kDebug: ROS_DEBUG("%s", msg.c_str()); break;
+    case LogLevel::kInfo: ROS_INFO("%s", msg.c_str()); break;
+    case LogLevel::kWarn: ROS_WARN("%s", msg.c_str()); break;
+    case LogLevel::kError: ROS_ERROR("%s", msg.c_str()); break;
+  }
+}
 
 LiveConfig live_of(const PlannerConfig& c) {
   LiveConfig l;

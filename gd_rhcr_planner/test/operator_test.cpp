@@ -6,6 +6,7 @@
 #include "gd_rhcr_planner/fleet_stats.hpp"
 #include "gd_rhcr_planner/health.hpp"
 #include "gd_rhcr_planner/operator_control.hpp"
+#include "gd_rhcr_planner/ros_messages.hpp"
 
 using namespace gd_rhcr_planner;
 
@@ -178,4 +179,44 @@ TEST(FleetMarkers, GoalLinesOnlyWhenAskedAndLabelsOnlyForSmallFleets) {
   auto a = fm.update(v);
   EXPECT_EQ(find(a, "goal_lines")->points.size(), 2u);
   EXPECT_EQ(count_ns(a, "labels"), 0);
+}
+
+// The node's conversions (ros_messages.hpp): REP 103 rows (the map's top row is the grid's last),
+// cell centres as target poses, live parameters both ways, a list parameter named in its error.
+TEST(RosMessages, MapCommandsAndLiveParametersConvert) {
+  LoadedMap map{small(), frame_of(small()), "inline", "movingai"};
+  const auto og = occupancy_grid(map, "map", ros::Time(1.0));
+  ASSERT_EQ(og.data.size(), 18u);
+  EXPECT_EQ(og.data[1 * 6 + 1], 100) << "the obstacle row stays in the middle";
+  EXPECT_EQ(og.data[0], 0);
+  const auto cmds = step_commands({{1, map.grid.cell(5, 0), kToPickup, 7}}, map, "map", 3, 0.5, ros::Time(2.0));
+  ASSERT_EQ(cmds.commands.size(), 1u);
+  EXPECT_EQ(cmds.commands[0].next_x, 5);
+  EXPECT_EQ(cmds.commands[0].next_y, 0);
+  EXPECT_DOUBLE_EQ(cmds.commands[0].target_pose.position.x, 5.5);
+  EXPECT_DOUBLE_EQ(cmds.commands[0].target_pose.position.y, 2.5) << "row 0 is the top, furthest from the origin";
+  EXPECT_EQ(cmds.commands[0].task_id, 7);
+  PlannerConfig pc = PlannerConfig::__getDefault__();
+  LiveConfig l = live_of(pc);
+  l.V = 4;
+  l.solver = "pibt";
+  copy_live(l, pc);
+  EXPECT_EQ(pc.V, 4);
+  EXPECT_EQ(pc.solver, "pibt");
+  XmlRpc::XmlRpcValue list;
+  list[0] = 1;
+  try {
+    xmlrpc_to_string(list, "V");
+    FAIL() << "a list was taken as a value";
+  } catch (const gdrhcr::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("~V"), std::string::npos);
+  }
+  TickStats st;
+  st.planner = "gd-rhcr";
+  st.figures.cache_reuses = 9;
+  st.dispatch.assigned = 2;
+  const auto m = stats_message(st);
+  EXPECT_EQ(m.planner, "gd-rhcr");
+  EXPECT_EQ(m.cache_reuses, 9u);
+  EXPECT_EQ(m.dispatch_assigned, 2u);
 }

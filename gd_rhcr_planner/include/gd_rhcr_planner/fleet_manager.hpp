@@ -210,6 +210,10 @@ class FleetManager {
 
 namespace gd_rhcr_planner {
 
+// Where a node keeps its task journal by default: $ROS_HOME (else ~/.ros)/gd_rhcr_planner/
+// <node name>.tasks.jsonl, one per node, so planners in different namespaces keep their own.
+std::string default_task_store(const std::string& node_name);
+
 // The node's own private parameters (config/fleet.yaml), besides the planners'.
 const std::vector<std::string>& node_param_names();
 // What a private parameter of the node is: one of its own, one of `planner`'s (forwarded to it),

@@ -13,6 +13,7 @@
 #include <gd_rhcr_msgs/TaskStatus.h>
 #include <gd_rhcr_planner/PlannerConfig.h>
 #include <nav_msgs/OccupancyGrid.h>
+#include <xmlrpcpp/XmlRpcValue.h>
 
 #include "gd_rhcr_planner/fleet_manager.hpp"
 #include "gd_rhcr_planner/map_loader.hpp"
@@ -20,6 +21,11 @@
 
 namespace gd_rhcr_planner {
 
+// A parameter's value as the core's Params read it; throws gdrhcr::ParamError naming `name` for
+// a list or a dictionary.
+std::string xmlrpc_to_string(XmlRpc::XmlRpcValue& v, const std::string& name);
+// The fleet manager's log lines through rosconsole.
+void ros_log(LogLevel level, const std::string& msg);
 LiveConfig live_of(const PlannerConfig& c);
 void copy_live(const LiveConfig& l, PlannerConfig& c);
 gd_rhcr_msgs::PlannerStats stats_message(const TickStats& s);
