@@ -142,17 +142,46 @@ uint64_t FleetManager::tick_count() const {
 // Inputs.
 
 bool FleetManager::update_robot(int64_t id, int x, int y, bool offline, bool moving, double now, std::string& error) {
+  RobotReport r;
+  r.id = id, r.x = x, r.y = y, r.mode = offline ? kOffline : kIdle, r.moving = moving;
+  return update_robots({r}, now, error) == 0;
+}
+
+int FleetManager::update_robots(const std::vector<RobotReport>& reports, double now, std::string& error) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (fleet_->update_robot(id, x, y, offline, moving, error, now)) return true;
-  ++bad_reports_;
-  log_every("report", 2.0, LogLevel::kWarn, "ignoring robot state: " + error);
-  return false;
+  last_stamp_.resize(fleet_->num_robots(), 0.0);
+  std::map<int64_t, int> seen;
+  for (const RobotReport& r : reports) ++seen[r.id];
+  int ignored = 0;
+  for (const RobotReport& r : reports) {
+    std::string why;
+    const bool known = r.id >= 0 && r.id < fleet_->num_robots();
+    if (known && seen[r.id] > 1) why = "robot " + std::to_string(r.id) + " is in one message twice";
+    else if (!r.pose_finite) why = "robot " + std::to_string(r.id) + ": the pose is not finite";
+    else if (r.mode > kModeStopped) why = "robot " + std::to_string(r.id) + ": unknown mode " + std::to_string(r.mode);
+    else if (known && r.stamp > 0 && r.stamp < last_stamp_[r.id])
+      why = "robot " + std::to_string(r.id) + ": stamped before its last report (out of order)";
+    else if (fleet_->update_robot(r.id, r.x, r.y, r.mode == kOffline, r.moving, why, now)) {
+      if (r.stamp > 0) last_stamp_[r.id] = r.stamp;
+      continue;
+    }
+    ++ignored;
+    ++bad_reports_;
+    last_ignored_ = why;
+    error = why;
+    log_every("report", 2.0, LogLevel::kWarn, "ignoring robot state: " + why);
+  }
+  return ignored;
 }
 
 SubmitResult FleetManager::submit(const TaskRequest& t) {
   std::lock_guard<std::mutex> lock(mutex_);
   auto r = fleet_->submit(t.pickup_x, t.pickup_y, t.delivery_x, t.delivery_y, t.priority, t.id);
-  if (!r.accepted) log(LogLevel::kWarn, "task " + std::to_string(r.task_id) + " rejected: " + r.reason);
+  if (!r.accepted) {
+    ++rejected_tasks_;
+    last_rejected_task_ = "task " + std::to_string(r.task_id) + ": " + r.reason;
+    log_every("task rejected", 1.0, LogLevel::kWarn, "task " + std::to_string(r.task_id) + " rejected: " + r.reason);
+  }
   return r;
 }
 
@@ -619,6 +648,9 @@ Health FleetManager::diagnose(double wall, std::vector<std::pair<std::string, st
   add_i("skipped ticks", skipped_);
   add_i("rejected plans", invalid_plans_);
   add_i("ignored robot reports", bad_reports_);
+  add("last ignored robot report", last_ignored_.empty() ? "none" : last_ignored_);
+  add_i("rejected tasks", rejected_tasks_);
+  add("last rejected task", last_rejected_task_.empty() ? "none" : last_rejected_task_);
   add("execution", "adg, commit horizon " + std::to_string(cfg_.commit_horizon) +
                        (cfg_.dispatch_rate > 0 ? ", dispatch on arrival" : ", dispatch at ticks"));
   add_i("moves dispatched between ticks", early_dispatches_);

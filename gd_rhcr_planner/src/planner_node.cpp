@@ -248,9 +248,8 @@ void PlannerNode::publish_static(const gdrhcr::MapdCells& mapd) {
 }
 
 void PlannerNode::on_states(const gd_rhcr_msgs::RobotStateArray::ConstPtr& msg) {
-  const double now = ros::Time::now().toSec();
   std::string error;
-  for (auto& s : msg->robots) fleet_->update_robot(s.id, s.x, s.y, s.mode == kOffline, s.moving, now, error);
+  fleet_->update_robots(robot_reports(*msg), ros::Time::now().toSec(), error);
 }
 
 void PlannerNode::on_task(const gd_rhcr_msgs::Task::ConstPtr& m) {

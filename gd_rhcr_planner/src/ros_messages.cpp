@@ -1,6 +1,7 @@
 // Conversions between the fleet manager's structs and ROS messages (ros_messages.hpp).
 #include "gd_rhcr_planner/ros_messages.hpp"
 
+#include <cmath>
 #include <sstream>
 
 #include <ros/console.h>
@@ -29,6 +30,22 @@ void ros_log(LogLevel level, const std::string& msg) {
     case LogLevel::kWarn: ROS_WARN("%s", msg.c_str()); break;
     case LogLevel::kError: ROS_ERROR("%s", msg.c_str()); break;
   }
+}
+
+std::vector<RobotReport> robot_reports(const gd_rhcr_msgs::RobotStateArray& msg) {
+  std::vector<RobotReport> out;
+  out.reserve(msg.robots.size());
+  const double stamp = msg.header.stamp.toSec();
+  for (const auto& s : msg.robots) {
+    const auto& p = s.pose;
+    RobotReport r;
+    r.id = s.id, r.x = s.x, r.y = s.y, r.mode = s.mode, r.moving = s.moving, r.stamp = stamp;
+    r.pose_finite = std::isfinite(p.position.x) && std::isfinite(p.position.y) && std::isfinite(p.position.z) &&
+                    std::isfinite(p.orientation.x) && std::isfinite(p.orientation.y) &&
+                    std::isfinite(p.orientation.z) && std::isfinite(p.orientation.w);
+    out.push_back(r);
+  }
+  return out;
 }
 
 LiveConfig live_of(const PlannerConfig& c) {

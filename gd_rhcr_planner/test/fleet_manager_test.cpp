@@ -249,3 +249,52 @@ TEST(FleetManager, AcceptedTasksSurviveARestartThroughTheJournal) {
   EXPECT_EQ(open[0].second.priority, 3);
   std::remove(path);
 }
+
+// Hostile reports are ignored with a reason and never move a robot.
+TEST(FleetManager, BadRobotReportsAreIgnoredWithAReason) {
+  const Grid g = warehouse();
+  FleetManager fm(g, config("pibt", 2));
+  std::string err;
+  RobotReport a;
+  a.id = 0, a.x = 0, a.y = 0, a.stamp = 10.0;
+  RobotReport b = a;
+  b.id = 1, b.x = 11, b.y = 4;
+  EXPECT_EQ(fm.update_robots({a, b}, 1.0, err), 0) << err;
+  auto expect_ignored = [&](std::vector<RobotReport> reports, const std::string& reason) {
+    std::string why;
+    EXPECT_EQ(fm.update_robots(reports, 1.0, why), static_cast<int>(reports.size())) << reason;
+    EXPECT_NE(why.find(reason), std::string::npos) << why;
+  };
+  RobotReport moved = a;
+  moved.x = 1, moved.stamp = 11.0;
+  RobotReport twice = moved;
+  twice.x = 0, twice.y = 2;
+  expect_ignored({moved, twice}, "twice");
+  RobotReport nan = moved;
+  nan.pose_finite = false;
+  expect_ignored({nan}, "not finite");
+  RobotReport stale = moved;
+  stale.stamp = 9.0;
+  expect_ignored({stale}, "out of order");
+  RobotReport off_map = moved;
+  off_map.x = 40;
+  expect_ignored({off_map}, "off the map");
+  RobotReport wall = moved;
+  wall.x = 1, wall.y = 1;
+  expect_ignored({wall}, "obstacle");
+  RobotReport mode = moved;
+  mode.mode = 200;
+  expect_ignored({mode}, "unknown mode");
+  std::vector<RobotReport> flood(100000, a);
+  for (size_t i = 0; i < flood.size(); ++i) flood[i].id = 1000 + static_cast<int64_t>(i);
+  expect_ignored(flood, "unknown robot id");
+  const auto r = fm.tick(2.0, 2.0, true);
+  ASSERT_TRUE(r.stepped);
+  EXPECT_EQ(r.view.pos[0], g.cell(0, 0)) << "no ignored report moved robot 0";
+  std::vector<std::pair<std::string, std::string>> values;
+  fm.diagnose(2.0, values);
+  std::map<std::string, std::string> d(values.begin(), values.end());
+  EXPECT_EQ(d["ignored robot reports"], std::to_string(6 + 100000 + 1));
+  EXPECT_NE(d["last ignored robot report"].find("unknown robot id"), std::string::npos);
+  EXPECT_EQ(fm.update_robots({moved}, 1.0, err), 0) << "a good, newer report is taken";
+}

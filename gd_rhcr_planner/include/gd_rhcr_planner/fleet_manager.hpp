@@ -74,6 +74,16 @@ gdrhcr::Params live_planner_params(const std::string& planner, const LiveConfig&
 
 enum class LogLevel { kDebug, kInfo, kWarn, kError };
 
+// One robot's report (gd_rhcr_msgs/RobotState) as the manager checks it.
+struct RobotReport {
+  int64_t id = 0;
+  int x = 0, y = 0;
+  uint8_t mode = 0;          // RobotState.MODE_*; MODE_OFFLINE takes the robot out
+  bool moving = false;
+  double stamp = 0;          // the message's stamp (s); 0 = unstamped, not checked for order
+  bool pose_finite = true;   // every pose field is a finite number
+};
+
 struct TaskRequest {
   int pickup_x = 0, pickup_y = 0, delivery_x = 0, delivery_y = 0, priority = 0;
   uint64_t id = 0;  // 0 = the manager picks one
@@ -119,7 +129,12 @@ class FleetManager {
   ~FleetManager();
 
   // --- inputs (any thread) ---
-  // A robot's report; false and `error` for a bad one (counted).
+  // Robots' reports of one message, received at `now` (the caller's clock, s). A report is
+  // ignored (counted, its reason kept for diagnostics) when its robot is unknown, its cell is off
+  // the map or on an obstacle, its mode is unknown, its pose is not finite, the same robot is in
+  // the message twice, or it is stamped before the robot's last accepted report. Returns the
+  // number ignored; `error`: the last reason.
+  int update_robots(const std::vector<RobotReport>& reports, double now, std::string& error);
   bool update_robot(int64_t id, int x, int y, bool offline, bool moving, double now, std::string& error);
   SubmitResult submit(const TaskRequest& t);
   bool cancel(uint64_t task_id, std::string& reason);
@@ -204,6 +219,10 @@ class FleetManager {
   std::string last_problem_;
   uint64_t last_problem_tick_ = 0;
   std::map<std::string, double> last_logged_;
+  std::vector<double> last_stamp_;  // per robot: the stamp of its last accepted report
+  std::string last_ignored_;        // why the last ignored report was ignored
+  uint64_t rejected_tasks_ = 0;
+  std::string last_rejected_task_;
 };
 
 }  // namespace gd_rhcr_planner

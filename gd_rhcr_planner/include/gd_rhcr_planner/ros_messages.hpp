@@ -8,6 +8,7 @@
 #include <gd_rhcr_msgs/GroupArray.h>
 #include <gd_rhcr_msgs/MapdCells.h>
 #include <gd_rhcr_msgs/PlannerStats.h>
+#include <gd_rhcr_msgs/RobotStateArray.h>
 #include <gd_rhcr_msgs/StepCommandArray.h>
 #include <gd_rhcr_msgs/Task.h>
 #include <gd_rhcr_msgs/TaskStatus.h>
@@ -26,6 +27,8 @@ namespace gd_rhcr_planner {
 std::string xmlrpc_to_string(XmlRpc::XmlRpcValue& v, const std::string& name);
 // The fleet manager's log lines through rosconsole.
 void ros_log(LogLevel level, const std::string& msg);
+// The reports of a RobotStateArray (its header stamp on each; pose checked for finiteness).
+std::vector<RobotReport> robot_reports(const gd_rhcr_msgs::RobotStateArray& msg);
 LiveConfig live_of(const PlannerConfig& c);
 void copy_live(const LiveConfig& l, PlannerConfig& c);
 gd_rhcr_msgs::PlannerStats stats_message(const TickStats& s);
