@@ -5,12 +5,13 @@ While the simulated warehouse runs (robots without an interlock), this node publ
 and adversarial messages on every topic the planner subscribes to (robot_states, tasks) and
 calls every service (submit_task, cancel_task, list_tasks, set_paused, emergency_stop) and the
 Delivery action with bad arguments: the named cases of the issue, then a seeded random stream of
-mutated messages. Throughout, the planner keeps ticking; each bad input gets a reason in a
+mutated messages. A node started with a misspelt parameter stops, naming it. Throughout, the planner keeps ticking; each bad input gets a reason in a
 response or in /diagnostics; no accepted task is lost; no robot is commanded into an occupied
 cell (fleet_sim: 0 collisions, 0 swaps, 0 moves its interlock would have stopped).
 """
-import math
+import os
 import random
+import subprocess
 import sys
 import threading
 import time
@@ -154,6 +155,22 @@ class Hostile(unittest.TestCase):
         return {t.id: s.state for t, s in zip(r.tasks, r.statuses)}
 
     # --- the named cases ---
+    def test_0_a_misspelt_parameter_stops_a_starting_node_naming_it(self):
+        import rospkg
+        maps = os.path.join(rospkg.RosPack().get_path(PKG), "maps", "warehouse_small.yaml")
+        for param, value, name in (("tick_rat", 3.0, "~tick_rat"), ("planner_params", {"c_sotf": 2}, "c-sotf"),
+                                   ("V", -3, "V")):
+            if rospy.has_param("/misspelt"):
+                rospy.delete_param("/misspelt")
+            rospy.set_param("/misspelt/misspelt_planner/map", maps)
+            rospy.set_param("/misspelt/misspelt_planner/task_store", "none")
+            rospy.set_param("/misspelt/misspelt_planner/" + param, value)
+            r = subprocess.run(["rosrun", PKG, "gd_rhcr_planner_node", "__name:=misspelt_planner", "__ns:=/misspelt"],
+                               capture_output=True, text=True, timeout=60)
+            self.assertNotEqual(r.returncode, 0, param)
+            self.assertIn(name, r.stdout + r.stderr, param)
+        rospy.delete_param("/misspelt")
+
     def test_1_robot_states(self):
         x0, y0 = self.w.get("cells")[0]
         self.states([self.robot(self.n + 5, x0, y0)])
