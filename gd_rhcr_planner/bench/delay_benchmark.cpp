@@ -12,6 +12,8 @@
 // --between 1 (default): moves are dispatched the moment the robots ahead have left (the node's
 // dispatch timer, Executor::advance after every substep); 0: at ticks only. --revoke 1 (default):
 // moves queued behind late robots are taken back and planned again (ExecutorConfig); 0: kept.
+// --late N: robots 0..N-1 are off the floor (they never reported) until --join-tick; then they
+// report, at their cell if it is free, else at a free one (a robot joining the fleet late).
 // Each robot's goals come from its own random stream, so both runs of a seed give every robot
 // the same goal sequence. DELAY_BENCH_STATS=1 prints the planner's counters after each run.
 #include <cstdio>
@@ -33,6 +35,7 @@ namespace {
 struct Options {
   std::string map = "maps/warehouse-10-20-10-2-1.map", planner = "gd-rhcr";
   int robots = 300, ticks = 300, max_delay = 20, speed = 6, seeds = 1, commit_horizon = 2, between = 1, revoke = 1;  // the node's defaults
+  int late = 0, join_tick = 50;  // robots 0..late-1 are off the floor until join_tick
   double p_delay = 0.01;
   std::vector<std::pair<std::string, std::string>> params;  // --param key=value, for the planner
 };
@@ -58,8 +61,11 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
   cfg.revoke_behind_late = o.revoke != 0;
   Executor ex(g, dist, o.robots, cfg);
   DelayedFleet fleet(g, o.robots, seed, o.speed, o.speed);
+  for (int i = 0; i < o.late; ++i) fleet.robots()[i].missing = true;
   Result r;
   for (int t = 0; t < o.ticks; ++t) {
+    if (t == o.join_tick)
+      for (int i = 0; i < o.late; ++i) fleet.join(i);
     auto goals = fleet.goals(r.goals);
     const TickOutput out = ex.tick(fleet.records(), goals, planner, true);
     if (!out.stepped) r.error = "no step: " + out.skip_reason;
@@ -101,6 +107,8 @@ Options read_options(const BenchOptions& cl) {
   o.commit_horizon = static_cast<int>(cl.integer("commit-horizon", o.commit_horizon, 1, 1000));
   o.between = static_cast<int>(cl.integer("between", o.between, 0, 1));
   o.revoke = static_cast<int>(cl.integer("revoke", o.revoke, 0, 1));
+  o.late = static_cast<int>(cl.integer("late", o.late, 0, o.robots));
+  o.join_tick = static_cast<int>(cl.integer("join-tick", o.join_tick, 0, 10000000));
   for (const std::string& kv : cl.all("param")) {
     const size_t eq = kv.find('=');
     if (eq == std::string::npos || eq == 0) throw BenchOptionError("--param must be key=value, not '" + kv + "'");
@@ -125,9 +133,11 @@ void print_usage() {
       "  --commit-horizon H    moves a robot may have committed and not finished, >= 1 (%d)\n"
       "  --between 0|1         dispatch on arrival between ticks (%d)\n"
       "  --revoke 0|1          take back moves queued behind late robots (%d)\n"
+      "  --late N              robots 0..N-1 are off the floor (never reported) until --join-tick, 0..robots (%d)\n"
+      "  --join-tick T         the tick at which they report (%d)\n"
       "  --param key=value     a planner parameter (repeatable)\n",
       d.map.c_str(), d.planner.c_str(), d.robots, d.ticks, d.p_delay, d.max_delay, SimRobot::kSub, d.speed, d.seeds,
-      d.commit_horizon, d.between, d.revoke);
+      d.commit_horizon, d.between, d.revoke, d.late, d.join_tick);
 }
 
 // Both runs of every seed and the figures; returns the exit code.
@@ -140,6 +150,7 @@ int run_all(const Options& o) {
               "delays p %.3f per tick of 1..%d ticks, random goals\n",
               o.map.c_str(), o.robots, o.planner.c_str(), o.commit_horizon, o.between ? "on arrival" : "at ticks", o.ticks,
               o.speed / double(SimRobot::kSub), o.p_delay, o.max_delay);
+  if (o.late > 0) std::printf("robots 0..%d join at tick %d\n", o.late - 1, o.join_tick);
   std::printf("%5s %14s %14s %7s %16s %16s %12s %14s\n", "seed", "goals/tick no", "goals/tick p", "ratio",
               "delayed robots", "waiting no / p", "held moves", "moves no / p");
   double sum_ratio = 0;
@@ -165,7 +176,7 @@ int run_all(const Options& o) {
 int main(int argc, char** argv) {
   try {
     const BenchOptions cl(argc, argv, {"map", "planner", "robots", "ticks", "p-delay", "max-delay", "speed", "seeds",
-                                       "commit-horizon", "between", "revoke", "param"});
+                                       "commit-horizon", "between", "revoke", "late", "join-tick", "param"});
     if (cl.help()) {
       print_usage();
       return 0;

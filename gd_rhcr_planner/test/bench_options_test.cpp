@@ -62,18 +62,20 @@ TEST(DelayBenchmarkOptions, NonsenseIsRejectedNamingTheOption) {
                    {"--p-delay 1.5", "--p-delay"},
                    {"--p-delay nan", "--p-delay"},
                    {"--param guidance", "--param"},
+                   {"--robots 6 --late 7", "--late"},
                    {"--robot 5", "--robot"},  // unknown
                    {"--robots", "--robots"}});  // no value
 }
 
 TEST(DelayBenchmarkOptions, GoodOptionsRunAndHelpListsThem) {
-  const Outcome ok = run(std::string(DELAY_BENCHMARK) + kSmallMap + " --robots 6 --ticks 3 --planner pibt --p-delay 0.5");
+  const Outcome ok = run(std::string(DELAY_BENCHMARK) + kSmallMap +
+                         " --robots 6 --ticks 4 --planner pibt --p-delay 0.5 --late 2 --join-tick 2");
   EXPECT_EQ(ok.code, 0) << ok.output;
   EXPECT_NE(ok.output.find("mean ratio"), std::string::npos) << ok.output;
   const Outcome help = run(std::string(DELAY_BENCHMARK) + " --help");
   EXPECT_EQ(help.code, 0) << help.output;
   for (const char* option : {"--robots", "--ticks", "--p-delay", "--max-delay", "--speed", "--seeds", "--commit-horizon",
-                             "--between", "--revoke", "--param"})
+                             "--between", "--revoke", "--late", "--join-tick", "--param"})
     EXPECT_NE(help.output.find(option), std::string::npos) << option;
 }
 

@@ -155,6 +155,24 @@ std::string DelayedFleet::check_physical() {
   return "";
 }
 
+void DelayedFleet::join(size_t i) {
+  SimRobot& s = robots_[i];
+  s.missing = false;
+  auto taken = [&](Cell c) {
+    for (size_t j = 0; j < robots_.size(); ++j) {
+      const SimRobot& o = robots_[j];
+      if (j != i && !o.missing && (o.cell == c || o.cmd == c || (o.moving && o.dst == c))) return true;
+    }
+    return false;
+  };
+  if (!taken(s.cell)) return;
+  for (Cell c : g_.free_cells())
+    if (!taken(c)) {
+      s.cell = c;
+      return;
+    }
+}
+
 int DelayedFleet::delayed() const {
   int n = 0;
   for (const SimRobot& s : robots_) n += s.delay > 0;

@@ -58,6 +58,9 @@ class DelayedFleet {
   std::string execute(const TickOutput& out, double p_delay, int max_delay_ticks, const Between& between = {});
   // Robots delayed right now.
   int delayed() const;
+  // Robot i, off the floor so far (missing), is put on it: at its cell when no robot is in it, is
+  // entering it or was commanded into it, else at the first free cell of the map no robot is.
+  void join(size_t i);
 
   gdrhcr::Cell collision_cell = gdrhcr::kNoCell;
 
