@@ -1,16 +1,17 @@
 // The core side of the Start-Kit adapter: builds the grid, the distance table and the planner
-// once, then turns every Start-Kit step into a planner step and its cells into MAPF_T actions
-// (gdrhcr::rotation_actions_for_step).
+// once, then turns every Start-Kit step into a planner step in the rotation model: natively
+// where the planner plans in it, else its mapf steps with turns and waits (MapfInRotation).
 #include "lorr_bridge.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <sstream>
 #include <stdexcept>
 
 #include "gdrhcr/dist_table.hpp"
 #include "gdrhcr/grid.hpp"
-#include "gdrhcr/lorr_io.hpp"
+#include "gdrhcr/mapf_in_rotation.hpp"
 #include "gdrhcr/params.hpp"
 #include "gdrhcr/planner.hpp"
 
@@ -86,21 +87,34 @@ BridgeOptions bridge_options_from_env() {
   o.params = parse_params(env_or("GDRHCR_PARAMS", ""));
   o.budget_ms = env_number("GDRHCR_BUDGET_MS", 0);
   o.seed = static_cast<uint64_t>(env_number("GDRHCR_SEED", 0));
+  o.turns = env_or("GDRHCR_TURNS", "auto");
+  if (o.turns != "auto" && o.turns != "native" && o.turns != "mapf-wait")
+    throw std::invalid_argument("GDRHCR_TURNS must be auto, native or mapf-wait, not '" + o.turns + "'");
   return o;
 }
 
 struct Bridge::Impl {
   Impl(int rows, int cols, const std::vector<int>& map, int n, const BridgeOptions& o)
-      : options(o), grid(grid_of(rows, cols, map)), dist(grid), num_agents(n) {
+      : options(o), grid(grid_of(rows, cols, map)), dist(grid, ActionModel::kRotation), num_agents(n) {
     Params params;
     for (auto& [k, v] : o.params) params.set(k, v);
     const double budget_s = o.budget_ms / 1000.0;
     if (budget_s > 0 && o.planner == "gd-rhcr" && !params.has("step-budget"))
       params.set("step-budget", std::to_string(budget_s));
     if (budget_s > 0 && o.planner == "rhcr" && !params.has("timeout")) params.set("timeout", std::to_string(budget_s));
-    planner = make_planner(o.planner, params, grid, n, o.seed);
+    const PlannerParams values = PlannerParams::resolve(o.planner, params, MapFacts(grid, n));
+    params.check_all_used("GDRHCR_PARAMS for planner " + o.planner);
+    if (o.turns == "mapf-wait")
+      planner = std::make_unique<MapfInRotation>(make_planner(values, grid, n, o.seed), grid);
+    else
+      planner = make_planner_in(values, grid, n, o.seed, ActionModel::kRotation, how);
+    if (o.turns == "native" && how != "native")
+      throw std::invalid_argument("GDRHCR_TURNS=native: planner " + o.planner + " does not plan in the rotation model");
+    std::fprintf(stderr, "gdrhcr lorr adapter: planner %s, turns %s, budget %g ms\n", o.planner.c_str(),
+                 o.turns == "mapf-wait" ? "mapf-wait" : how.c_str(), o.budget_ms);
     pos.resize(n);
     headings.resize(n);
+    next_headings.resize(n);
     next.resize(n);
     goals.resize(n);
   }
@@ -110,8 +124,9 @@ struct Bridge::Impl {
   DistTable dist;
   int num_agents;
   std::unique_ptr<Planner> planner;
+  std::string how;
   std::vector<Cell> pos, next;
-  std::vector<Heading> headings;
+  std::vector<Heading> headings, next_headings;
   std::vector<std::vector<Cell>> goals;
 };
 
@@ -135,12 +150,18 @@ void Bridge::plan(int timestep, const std::vector<int>& locations, const std::ve
     if (m.goals[i].empty()) m.goals[i].push_back(m.pos[i]);  // no task: stay put
   }
   std::fill(m.next.begin(), m.next.end(), kNoCell);
-  WorldView view{m.grid, m.dist, timestep, m.pos, m.goals};
-  m.planner->plan_step(view, m.next);
   for (int i = 0; i < n; ++i) m.headings[i] = static_cast<Heading>(headings[i]);
-  const std::vector<Action> act = rotation_actions_for_step(m.grid, m.pos, m.headings, m.next);
+  WorldView view{m.grid, m.dist, timestep, m.pos, m.goals};
+  view.action_model = ActionModel::kRotation;
+  view.headings = &m.headings;
+  view.next_headings = &m.next_headings;
+  m.planner->plan_step(view, m.next);
   actions.assign(n, kStartKitWait);
-  for (int i = 0; i < n; ++i) actions[i] = start_kit_action(act[i]);
+  for (int i = 0; i < n; ++i) {
+    const auto a = action_between(m.grid, Pose{m.pos[i], m.headings[i]}, Pose{m.next[i], m.next_headings[i]});
+    if (!a) throw std::logic_error("lorr adapter: the planner's step for agent " + std::to_string(i) + " is no action");
+    actions[i] = start_kit_action(*a);
+  }
 }
 
 }  // namespace gdrhcr_lorr

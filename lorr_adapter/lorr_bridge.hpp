@@ -17,11 +17,15 @@ namespace gdrhcr_lorr {
 //   GDRHCR_BUDGET_MS  our planner's time per step in ms (0 = none): GD-RHCR's step-budget and
 //                     RHCR's PBS timeout unless GDRHCR_PARAMS sets them
 //   GDRHCR_SEED       seed for the planner's tie-breaks (default 0)
+//   GDRHCR_TURNS      auto (default: the planner's native rotation planning where it has it,
+//                     else its mapf steps with turns and waits, gdrhcr::MapfInRotation),
+//                     native, or mapf-wait
 struct BridgeOptions {
   std::string planner = "gd-rhcr";
   std::vector<std::pair<std::string, std::string>> params;
   double budget_ms = 0;
   uint64_t seed = 0;
+  std::string turns = "auto";
 };
 // Throws std::invalid_argument naming the variable for a malformed value.
 BridgeOptions bridge_options_from_env();

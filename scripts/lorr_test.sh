@@ -1,10 +1,14 @@
 #!/usr/bin/env bash
-# CI test of the LoRR adapter (issue 23): our GD-RHCR as the Start-Kit's MAPFPlanner on a small
-# instance (test/lorr/small: 12 x 8 map, 6 agents, 60 steps), refereed by the Start-Kit's own
-# simulator. Fails unless the Start-Kit reports AllValid Yes, no error, no timed-out step, and
-# the agents finish tasks. The Start-Kit (v1.1.5) stays outside the repository:
-# $LORR_START_KIT, else ../shared/lorr/start-kit-v1.1.5 next to the repository, else
-# /work/shared/lorr/start-kit-v1.1.5.
+# CI test of the LoRR adapter and of gdrhcr_sim's LoRR semantics (issue 23): our GD-RHCR as the
+# Start-Kit's MAPFPlanner on a small instance (test/lorr/small: a 12 x 8 map with 'O' and 'W'
+# cells, which LoRR treats as free, and a walled-in cell; 6 agents, one starting on a 'W';
+# tasks on a start cell, repeated tasks and one unreachable task; 60 steps), refereed by the
+# Start-Kit's own simulator. Fails unless the Start-Kit reports AllValid Yes, no error, no
+# timed-out step and finished tasks, and unless `gdrhcr_sim --lorr-problem --lorr-out` on the
+# same instance writes the very same output (actions, starts, tasks finished, events, tasks,
+# costs): the same planner (deterministic: no time budget here) in the same rules.
+# The Start-Kit (v1.1.5) stays outside the repository: $LORR_START_KIT, else
+# ../shared/lorr/start-kit-v1.1.5 next to the repository, else /work/shared/lorr/start-kit-v1.1.5.
 set -eo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 kit=${LORR_START_KIT:-}
@@ -25,11 +29,20 @@ if [ -z "$kit" ]; then
 fi
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-bash "$top/scripts/bench_lorr.sh" "$kit" "$top/test/lorr/small/small.json" 60 "$tmp/out.json" 100
-/usr/bin/python3 - "$tmp/out.json" <<'PY'
+instance=$top/test/lorr/small/small.json
+bash "$top/scripts/bench_lorr.sh" "$kit" "$instance" 60 "$tmp/out.json" 0
+cmake --build "$top/build" --target gdrhcr_sim -j2 >/dev/null
+"$top/build/src/gdrhcr_sim" --lorr-problem "$instance" --planner gd-rhcr --steps 60 --quiet \
+  --out "$tmp/sim.json" --lorr-out "$tmp/ours.json"
+/usr/bin/python3 - "$tmp/out.json" "$tmp/ours.json" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
+ours = json.load(open(sys.argv[2]))
 problems = []
+for key in ["actionModel", "AllValid", "teamSize", "start", "numTaskFinished", "sumOfCost", "makespan",
+            "actualPaths", "plannerPaths", "errors", "events", "tasks"]:
+    if ours.get(key) != r.get(key):
+        problems.append(f"gdrhcr_sim --lorr-out differs from the Start-Kit in {key!r}")
 if r.get("AllValid") != "Yes": problems.append(f"AllValid is {r.get('AllValid')!r}")
 if r.get("errors"): problems.append(f"errors: {r['errors'][:5]}")
 if r.get("actionModel") != "MAPF_T": problems.append(f"actionModel {r.get('actionModel')!r}")
@@ -42,5 +55,6 @@ if r.get("numTaskFinished", 0) < 5: problems.append(f"only {r.get('numTaskFinish
 if problems:
     print("lorr_test: FAIL: " + "; ".join(problems))
     sys.exit(1)
-print(f"lorr_test: OK: AllValid Yes, no errors, {r['numTaskFinished']} tasks finished in 60 steps")
+print(f"lorr_test: OK: AllValid Yes, no errors, {r['numTaskFinished']} tasks finished in 60 steps; "
+      "gdrhcr_sim --lorr-problem writes the same output")
 PY

@@ -12,6 +12,7 @@
 
 #include "gdrhcr/distinct_goal_stream.hpp"
 #include "gdrhcr/lorr_io.hpp"
+#include "gdrhcr/mapf_in_rotation.hpp"
 #include "gdrhcr/planner_params.hpp"
 #include "gdrhcr/simulator.hpp"
 #include "gdrhcr/validator.hpp"
@@ -25,8 +26,11 @@ const char* kUsage =
     "  --map FILE          MovingAI .map or RHCR kiva .map (required unless --lorr-problem)\n"
     "  --lorr-problem FILE a LoRR Start-Kit problem JSON: its map, agents (teamSize starts) and\n"
     "                      task list (taskAssignmentStrategy; numTasksReveal is the default\n"
-    "                      --lookahead); replaces --map, --agents, --tasks\n"
-    "  --lorr-out FILE     also write the run as LoRR output JSON (PlanViz, MAPF model)\n"
+    "                      --lookahead); replaces --map, --agents, --tasks; runs in the\n"
+    "                      rotation model unless --action-model mapf (a planner without rotation\n"
+    "                      planning then waits for its turns: stats.rotation_by mapf-wait)\n"
+    "  --lorr-out FILE     also write the run as the Start-Kit's output JSON, in the run's action\n"
+    "                      model (rotation: MAPF_T, F/R/C/W; mapf: PlanViz's MAPF letters)\n"
     "  --tasks random|mapd task stream (default random)\n"
     "  --pickups FILE      MAPD pickup cells, 'x y' per line (default: MAP.pickups beside\n"
     "                      the map if present, else the rule in the README)\n"
@@ -125,9 +129,9 @@ struct RunOptions {
   std::unique_ptr<LorrProblem> lorr;
 };
 
-ActionModel read_action_model(Params& args) {
+ActionModel read_action_model(Params& args, const char* fallback) {
   try {
-    return parse_action_model(args.get_string("action-model", "mapf"));
+    return parse_action_model(args.get_string("action-model", fallback));
   } catch (const std::invalid_argument& e) {
     throw ParamError(std::string("--action-model: ") + e.what());
   }
@@ -148,7 +152,7 @@ RunOptions read_options(Params& args) {
   o.pickups_file = args.get_string("pickups", "");
   o.deliveries_file = args.get_string("deliveries", "");
   o.planner = args.get_string("planner", "pibt");
-  o.action_model = read_action_model(args);
+  o.action_model = read_action_model(args, o.lorr ? "rotation" : "mapf");  // LoRR's own model: MAPF_T
   o.agents = o.lorr ? o.lorr->team_size : args.get_int("agents", 100, 1, 10000000);
   o.steps = args.get_int("steps", 500, 1, 100000000);
   o.seed = args.get_u64("seed", 0);
@@ -244,7 +248,9 @@ int run(Params& args, const Flags& flags) {
   TaskListStream* task_list = nullptr;
   std::unique_ptr<TaskStream> tasks = make_tasks(o, grid, task_info, task_list);
   const std::vector<Cell> starts = o.lorr ? o.lorr->starts : random_starts(grid, o.agents, o.seed);
-  auto planner = make_planner(values, grid, o.agents, o.seed, o.action_model);
+  std::string turns = "native";  // LoRR: a planner without rotation planning waits for its turns
+  auto planner = o.lorr ? make_planner_in(values, grid, o.agents, o.seed, o.action_model, turns)
+                        : make_planner(values, grid, o.agents, o.seed, o.action_model);
 
   SimOptions opt;
   opt.steps = o.steps;
@@ -259,7 +265,9 @@ int run(Params& args, const Flags& flags) {
     std::vector<std::vector<long>> ids;
     if (task_list)
       for (int i = 0; i < o.agents; ++i) ids.push_back(task_list->assigned_ids(i));
-    write_text(o.lorr_out, lorr_output(grid, r.paths, recorded.goals(), o.lookahead, ids).dump() + "\n");
+    const bool rotation = o.action_model == ActionModel::kRotation;
+    write_text(o.lorr_out,
+               lorr_output(grid, r.paths, recorded.goals(), o.lookahead, ids, rotation ? &r.headings : nullptr).dump() + "\n");
   }
   write_text(o.out_path, result_json(o, r, *planner, values, task_info, dist).dump(2) + "\n");
   if (!flags.quiet)

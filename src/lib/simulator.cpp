@@ -53,7 +53,7 @@ class Run {
   Run(const Grid& grid, const DistTable& dist, TaskStream& tasks, Planner& planner,
       const std::vector<Cell>& starts, const SimOptions& options)
       : grid_(grid), dist_(dist), tasks_(tasks), planner_(planner), opt_(options), n_(static_cast<int>(starts.size())),
-        pos_(starts), next_(n_, kNoCell), from_(starts), goals_(n_), validator_(grid, options.action_model),
+        pos_(starts), next_(n_, kNoCell), goals_(n_), errand_(n_), validator_(grid, options.action_model),
         got_at_(n_, 0), still_(n_, 0), dist0_(n_), late_(n_, 0), ever_late_(n_, 0) {
     r_.steps = options.steps;
     r_.agents = n_;
@@ -62,8 +62,7 @@ class Run {
     validator_.require_valid(pos_, pos_, -1, heads(), heads());  // the start: free, distinct cells
     const int lookahead = std::max(1, options.lookahead);
     for (int i = 0; i < n_; ++i) {
-      Cell last = pos_[i];
-      for (int k = 0; k < lookahead; ++k) goals_[i].push_back(last = tasks_.next_goal(i, last));
+      for (int k = 0; k < lookahead; ++k) hand_out_goal(i);
       dist0_[i] = shortest(i);
     }
     if (opt_.record_paths) {
@@ -137,9 +136,15 @@ class Run {
     validator_.require_valid(pos_, next_, t, heads(), rotation() ? &next_head_ : nullptr);
   }
 
-  // Executes the step: agents on their goal get the next one. A goal equal to the cell it was
-  // drawn from (only an agent alone in a one-cell component gets one) is a task of length zero
-  // and is not counted.
+  // Agent i's next goal, drawn from its last one (or its cell), and whether it is an errand.
+  void hand_out_goal(int i) {
+    const Cell from = goals_[i].empty() ? pos_[i] : goals_[i].back();
+    goals_[i].push_back(tasks_.next_goal(i, from));
+    errand_[i].push_back(tasks_.is_errand(i, goals_[i].back(), from));
+  }
+
+  // Executes the step: agents on their goal get the next one. A goal that is no errand
+  // (TaskStream::is_errand) is not counted.
   void advance(int t) {
     for (int i = 0; i < n_; ++i) {
       still_[i] = (next_[i] == pos_[i] && next_[i] != goals_[i].front()) ? still_[i] + 1 : 0;
@@ -150,10 +155,10 @@ class Run {
     for (int i = 0; i < n_; ++i) {
       check_late(i, t + 1);
       if (pos_[i] != goals_[i].front()) continue;
-      if (goals_[i].front() != from_[i]) ++r_.goals_reached;
-      from_[i] = goals_[i].front();
+      if (errand_[i].front()) ++r_.goals_reached;
       goals_[i].erase(goals_[i].begin());
-      goals_[i].push_back(tasks_.next_goal(i, goals_[i].empty() ? pos_[i] : goals_[i].back()));
+      errand_[i].erase(errand_[i].begin());
+      hand_out_goal(i);
       got_at_[i] = t + 1;
       late_[i] = 0;
       dist0_[i] = shortest(i);
@@ -184,8 +189,8 @@ class Run {
   SimResult r_;
   std::vector<Cell> pos_, next_;
   std::vector<Heading> head_, next_head_, start_head_;  // rotation only
-  std::vector<Cell> from_;  // the cell each agent's current goal was drawn from
   std::vector<std::vector<Cell>> goals_;
+  std::vector<std::vector<uint8_t>> errand_;  // per goal in goals_: counted when reached
   StepValidator validator_;
   // Progress: when each agent got its current goal, its shortest distance then, whether that goal
   // is counted late, and how long the agent has stood still.
@@ -233,7 +238,7 @@ double free_flow_throughput(const Grid& grid, const DistTable& dist, const TaskS
     long t = 0;
     for (;;) {
       const Cell g = replay->next_goal(i, cur);
-      if (g == cur) break;  // no other cell reachable: no task to count
+      if (!replay->is_errand(i, g, cur)) break;  // no task to count
       int d = dist.get(g, cur);
       if (d >= kUnreachable) break;  // unreachable goal: the agent never gets there
       if (rotation) d = walk_to_goal(grid, *dist.row(g), pose);

@@ -64,6 +64,11 @@ TaskListStream::TaskListStream(const Grid& grid, std::vector<Cell> tasks, int te
     if (!grid_.is_free(tasks_[k]))
       throw std::invalid_argument("task list: task " + std::to_string(k) + " at cell id " +
                                   std::to_string(tasks_[k]) + " is not a free cell of the map");
+  if (strategy_ == Strategy::RoundRobinFixed) {  // agent a gets tasks a, a + n, ...: ceil((m - a) / n)
+    const long m = static_cast<long>(tasks_.size()), n = team_size_;
+    fixed_first_id_.assign(team_size_, 0);
+    for (long a = 1; a < n; ++a) fixed_first_id_[a] = fixed_first_id_[a - 1] + (a - 1 < m ? (m - (a - 1) + n - 1) / n : 0);
+  }
 }
 
 const char* TaskListStream::to_string(Strategy s) {
@@ -91,26 +96,28 @@ const std::vector<long>& TaskListStream::assigned_ids(int agent) const {
 Cell TaskListStream::next_goal(int agent, Cell current) {
   require_free(grid_, agent, current, "task list");
   if (agent < 0) throw std::out_of_range("task stream: negative agent id");
+  if (agent >= team_size_)
+    throw std::out_of_range("task list: agent " + std::to_string(agent) + " is not in the team of " +
+                            std::to_string(team_size_));
   if (static_cast<int>(ids_.size()) <= agent) ids_.resize(agent + 1), next_round_.resize(agent + 1, 0);
   const long m = static_cast<long>(tasks_.size());
-  const int region = grid_.component(current);
-  // At most m candidates are looked at, so an agent whose region holds no task stops asking.
-  for (long tries = 0; tries < m; ++tries) {
-    long id;
-    if (strategy_ == Strategy::Greedy) {
-      if (next_shared_ >= m) break;
-      id = next_shared_++;
-    } else {
-      id = next_round_[agent]++ * team_size_ + agent;
-      if (strategy_ == Strategy::RoundRobinFixed && id >= m) break;
-    }
-    const Cell c = tasks_[id % m];
-    if (grid_.component(c) != region) continue;  // unreachable from here: skipped
-    ids_[agent].push_back(id);
-    return c;
+  long index = -1, id = -1;  // place in the list, Start-Kit id
+  if (strategy_ == Strategy::Greedy) {
+    if (next_shared_ < m) index = id = next_shared_++;
+  } else {
+    const long j = next_round_[agent]++;
+    index = j * team_size_ + agent;
+    if (strategy_ == Strategy::RoundRobin) id = next_id_++;
+    else if (index < m) id = fixed_first_id_[agent] + j;
+    else index = -1;
   }
-  ids_[agent].push_back(-1);
-  return current;
+  ids_[agent].push_back(id);
+  return index < 0 ? current : tasks_[index % m];
+}
+
+bool TaskListStream::is_errand(int agent, Cell, Cell) const {
+  const auto& ids = assigned_ids(agent);
+  return !ids.empty() && ids.back() >= 0;
 }
 
 std::unique_ptr<TaskStream> TaskListStream::clone_fresh() const {

@@ -124,26 +124,45 @@ printf 'type octile\nheight 4\nwidth 6\nmap\nE....S\n.@@@..\n......\nS....E\n' >
 printf '3\n0\n11\n23\n' >"$tmp/lorr/agents.txt"
 printf '5\n5\n18\n2\n12\n23\n' >"$tmp/lorr/tasks.txt"
 printf '{"mapFile": "maps/small.map", "agentFile": "agents.txt", "teamSize": 3, "taskFile": "tasks.txt", "numTasksReveal": 1}\n' >"$tmp/lorr/problem.json"
-if "$sim" --lorr-problem "$tmp/lorr/problem.json" --steps 40 --quiet --out "$tmp/lorr/r.json" \
-     --paths "$tmp/lorr/paths.txt" --lorr-out "$tmp/lorr/out.json" &&
-   /usr/bin/python3 - "$tmp/lorr/r.json" "$tmp/lorr/paths.txt" "$tmp/lorr/out.json" <<'PY'
+# The Start-Kit's output in the run's model: rotation by default (MAPF_T, F/R/C/W, start facing
+# east), mapf on request (PlanViz's R/L/U/D); both replay our executed paths.
+for model in default mapf; do
+  extra=()
+  [ "$model" = mapf ] && extra=(--action-model mapf)
+  if "$sim" --lorr-problem "$tmp/lorr/problem.json" --steps 40 --quiet --out "$tmp/lorr/r.json" "${extra[@]}" \
+       --paths "$tmp/lorr/paths.txt" --lorr-out "$tmp/lorr/out.json" &&
+     /usr/bin/python3 - "$tmp/lorr/r.json" "$tmp/lorr/paths.txt" "$tmp/lorr/out.json" "$model" <<'PY'
 import json, re, sys
 r = json.load(open(sys.argv[1]))
+rotation = sys.argv[4] == "default"
 assert r["agents"] == 3 and r["tasks"]["kind"] == "lorr" and r["params"]["lookahead"] == 1, r
+assert r["action_model"] == ("rotation" if rotation else "mapf"), r["action_model"]
 o = json.load(open(sys.argv[3]))
-assert o["actionModel"] == "MAPF" and o["teamSize"] == 3 and o["makespan"] == 40
+assert o["actionModel"] == ("MAPF_T" if rotation else "MAPF") and o["teamSize"] == 3 and o["makespan"] == 40, o
 assert o["numTaskFinished"] == r["goals_reached"] > 0, (o["numTaskFinished"], r["goals_reached"])
+assert o["plannerPaths"] == o["actualPaths"] and o["sumOfCost"] == 3 * 40
+assert all(s[2] == ("E" if rotation else "N/A") for s in o["start"]), o["start"]
 step = {"R": (1, 0), "L": (-1, 0), "U": (0, 1), "D": (0, -1), "W": (0, 0)}  # (dx, dy); U = row + 1
+ahead = [(1, 0), (0, 1), (-1, 0), (0, -1)]  # E, S, W, N (rows grow downwards)
+letters = set()
 for line, start, moves in zip(open(sys.argv[2]), o["start"], o["actualPaths"]):
     cells = [tuple(map(int, c)) for c in re.findall(r"\((\d+),(\d+)\)", line)]
-    x, y = start[1], start[0]
+    x, y, h = start[1], start[0], 0
     replay = [(x, y)]
     for m in moves.split(","):
-        x, y = x + step[m][0], y + step[m][1]
+        letters.add(m)
+        if not rotation:
+            x, y = x + step[m][0], y + step[m][1]
+        elif m == "F":
+            x, y = x + ahead[h][0], y + ahead[h][1]
+        else:
+            h = (h + {"R": 1, "C": 3, "W": 0}[m]) % 4
         replay.append((x, y))
     assert replay == cells, (replay, cells)
+assert ("F" in letters) == rotation and ("R" in letters or "C" in letters or not rotation), letters
 PY
-then ok "LoRR problem runs; LoRR output replays the paths"; else bad "LoRR problem run / output"; fi
+  then ok "LoRR problem runs ($model model); Start-Kit output replays the paths"; else bad "LoRR problem run / output ($model model)"; fi
+done
 printf '{"mapFile": "maps/small.map", "agentFile": "agents.txt", "taskFile": "tasks.txt"}\n' >"$tmp/lorr/noteam.json"
 expect_error "LoRR problem without teamSize" "noteam.json: field \"teamSize\" is missing" --lorr-problem "$tmp/lorr/noteam.json"
 printf '3\n0\n7\n23\n' >"$tmp/lorr/wall.agents"

@@ -5,14 +5,16 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
 
 #include <unistd.h>
 
 #include "gdrhcr/lorr_io.hpp"
+#include "gdrhcr/mapf_in_rotation.hpp"
 #include "gdrhcr/params.hpp"
 #include "gdrhcr/planner.hpp"
 #include "gdrhcr/simulator.hpp"
-#include "gdrhcr/validator.hpp"
 
 using namespace gdrhcr;
 namespace fs = std::filesystem;
@@ -127,22 +129,34 @@ TEST(LorrIo, TaskListRunsInTheStartKitsOrder) {
   EXPECT_EQ(rr.next_goal(0, 5), 2);
   EXPECT_EQ(rr.next_goal(1, 2), 4);
   EXPECT_EQ(rr.next_goal(1, 4), 1);
-  EXPECT_EQ(rr.assigned_ids(0), (std::vector<long>{0, 2, 4, 6}));
-  EXPECT_EQ(rr.assigned_ids(1), (std::vector<long>{1, 3, 5}));
+  // Ids count assignments in the order they were made (the Start-Kit's task_id).
+  EXPECT_EQ(rr.assigned_ids(0), (std::vector<long>{0, 2, 3, 4}));
+  EXPECT_EQ(rr.assigned_ids(1), (std::vector<long>{1, 5, 6}));
   TaskListStream fixed(g, tasks, 2, TaskListStream::Strategy::RoundRobinFixed);
   EXPECT_EQ(fixed.next_goal(1, 0), 2);
   EXPECT_EQ(fixed.next_goal(1, 2), 4);
   EXPECT_EQ(fixed.next_goal(1, 4), 4);  // exhausted: stays
-  EXPECT_EQ(fixed.assigned_ids(1), (std::vector<long>{1, 3, -1}));
+  // Ids agent-major: agent 0 holds tasks 0, 2, 4 (ids 0..2), agent 1 tasks 1, 3 (ids 3, 4).
+  EXPECT_EQ(fixed.assigned_ids(1), (std::vector<long>{3, 4, -1}));
+  EXPECT_FALSE(fixed.is_errand(1, 4, 4));  // exhausted: its own cell, no errand
+  EXPECT_EQ(fixed.next_goal(0, 0), 1);
+  EXPECT_EQ(fixed.assigned_ids(0), (std::vector<long>{0}));
   TaskListStream greedy(g, tasks, 2, TaskListStream::Strategy::Greedy);
   EXPECT_EQ(greedy.next_goal(1, 0), 1);
   EXPECT_EQ(greedy.next_goal(0, 0), 2);
   EXPECT_EQ(greedy.next_goal(1, 1), 3);
   EXPECT_EQ(greedy.clone_fresh()->next_goal(0, 0), 1);
-  // Tasks in another region are skipped.
+  // As in the Start-Kit, a task in another region is assigned all the same, and a task on the
+  // agent's own cell (or equal to its previous one) is an errand of length zero.
   Grid split = Grid::from_rows({"..@.."});
-  TaskListStream s(split, {3, 1, 4}, 1, TaskListStream::Strategy::RoundRobin);
-  EXPECT_EQ(s.next_goal(0, 0), 1);
+  TaskListStream s(split, {3, 1, 1}, 1, TaskListStream::Strategy::RoundRobin);
+  EXPECT_EQ(s.next_goal(0, 0), 3);
+  EXPECT_TRUE(s.is_errand(0, 3, 0));
+  EXPECT_EQ(s.next_goal(0, 3), 1);
+  EXPECT_EQ(s.next_goal(0, 1), 1);
+  EXPECT_TRUE(s.is_errand(0, 1, 1));
+  RandomNavigationStream alone(Grid::from_rows({".@."}), 1);
+  EXPECT_FALSE(alone.is_errand(0, 0, 0));  // elsewhere a goal on the agent's own cell is none
   EXPECT_THROW(TaskListStream(split, {2}, 1, TaskListStream::Strategy::Greedy), std::invalid_argument);
   EXPECT_THROW(TaskListStream::parse_strategy("fifo"), std::invalid_argument);
 }
@@ -156,7 +170,9 @@ TEST(LorrIo, MoveLettersFollowPlanViz) {
   EXPECT_EQ(j["actualPaths"][0], "U,D,L,D,R,W");
   EXPECT_EQ(j["start"][0], nlohmann::json({1, 1, "N/A"}));  // [row, col, orientation]
   EXPECT_EQ(j["actionModel"], "MAPF");
-  EXPECT_EQ(j["makespan"], 6);
+  EXPECT_EQ(j["makespan"], 5);  // the Start-Kit's: timesteps with a task (finished at t = 5)
+  EXPECT_EQ(j["sumOfCost"], 5);
+  EXPECT_EQ(j["plannerPaths"], j["actualPaths"]);
   EXPECT_EQ(j["numTaskFinished"], 1);
   EXPECT_EQ(j["events"][0], nlohmann::json::parse(R"([[0, 0, "assigned"], [0, 5, "finished"]])"));
   EXPECT_EQ(j["tasks"][0], nlohmann::json({0, 0, 1}));  // [id, row, col]
@@ -204,6 +220,8 @@ TEST(LorrIo, OutputReplaysOurOwnPathsExactly) {
     EXPECT_EQ(back["numTaskFinished"].get<long>(), r.goals_reached);
     EXPECT_EQ(back["teamSize"], 60);
     EXPECT_EQ(back["makespan"], 120);
+    std::map<long, Cell> task_cell;  // "tasks": [id, row, col], by id
+    for (auto& e : back["tasks"]) task_cell[e[0].get<long>()] = p.grid.cell(e[2].get<int>(), e[1].get<int>());
     long finished = 0;
     for (int i = 0; i < p.team_size; ++i)
       for (auto& e : back["events"][i]) {
@@ -211,7 +229,8 @@ TEST(LorrIo, OutputReplaysOurOwnPathsExactly) {
         if (e[2] == "finished") {
           ++finished;
           // The agent stands on the task's cell at that timestep, and the task is in "tasks".
-          EXPECT_EQ(r.paths[i][t], p.tasks[id % p.tasks.size()]);
+          ASSERT_TRUE(task_cell.count(id)) << id;
+          EXPECT_EQ(r.paths[i][t], task_cell[id]);
         }
       }
     EXPECT_EQ(finished, r.goals_reached);
@@ -219,66 +238,134 @@ TEST(LorrIo, OutputReplaysOurOwnPathsExactly) {
   }
 }
 
+namespace {
+// One LoRR run on `dir`'s problem with PIBT, in `model` (a mapf planner waiting for its turns in
+// rotation); the recorded goals come back in `goals`.
+SimResult run_lorr(const LorrProblem& p, int steps, ActionModel model, std::vector<std::vector<Cell>>* goals = nullptr,
+                   const std::string& planner_name = "pibt") {
+  TaskListStream list(p.grid, p.tasks, p.team_size, p.strategy);
+  RecordingTaskStream rec(list);
+  DistTable dist(p.grid, model);
+  Params params;
+  const PlannerParams values = PlannerParams::resolve(planner_name, params, MapFacts(p.grid, p.team_size));
+  std::string how;
+  auto planner = make_planner_in(values, p.grid, p.team_size, 1, model, how);
+  SimOptions opt;
+  opt.steps = steps;
+  opt.lookahead = p.num_tasks_reveal;
+  opt.record_paths = true;
+  opt.action_model = model;
+  SimResult r = run_simulation(p.grid, dist, rec, *planner, p.starts, opt);
+  if (goals) *goals = rec.goals();
+  return r;
+}
+}  // namespace
 
-TEST(LorrIo, RotationActionsStopWhoeverFollowsAnAgentThatTurns) {
-  Grid g = Grid::from_rows({"......", "......"});
-  // A train along row 0 heading east: 0 at (0,0), 1 at (1,0), 2 at (2,0); the front one (2)
-  // faces north but wants to go east, so it turns (clockwise from north) and 1 and 0 wait.
-  const std::vector<Cell> pos{g.cell(0, 0), g.cell(1, 0), g.cell(2, 0), g.cell(5, 0)};
-  const std::vector<Cell> next{g.cell(1, 0), g.cell(2, 0), g.cell(3, 0), g.cell(5, 1)};
-  const std::vector<Heading> heading{kEast, kEast, kNorth, kSouth};
-  using A = Action;
-  const auto act = rotation_actions_for_step(g, pos, heading, next);
-  EXPECT_EQ(act, (std::vector<A>{A::kWait, A::kWait, A::kClockwise, A::kForward}));
-  // Facing away (west, wants east): a half turn, clockwise first; facing south: counter-clockwise.
-  EXPECT_EQ(rotation_actions_for_step(g, {g.cell(5, 0)}, {kWest}, {g.cell(4, 0)})[0], A::kForward);
-  EXPECT_EQ(rotation_actions_for_step(g, {g.cell(0, 0)}, {kWest}, {g.cell(1, 0)})[0], A::kClockwise);
-  EXPECT_EQ(rotation_actions_for_step(g, {g.cell(0, 0)}, {kSouth}, {g.cell(1, 0)})[0], A::kCounterClockwise);
-  // A rotating cycle of four, all facing their next cell, moves as one.
-  const std::vector<Cell> cyc{g.cell(0, 0), g.cell(1, 0), g.cell(1, 1), g.cell(0, 1)};
-  const std::vector<Cell> cyc_next{g.cell(1, 0), g.cell(1, 1), g.cell(0, 1), g.cell(0, 0)};
-  EXPECT_EQ(rotation_actions_for_step(g, cyc, {kEast, kSouth, kWest, kNorth}, cyc_next), std::vector<A>(4, A::kForward));
-  // One of them turning stops the whole cycle.
-  EXPECT_EQ(rotation_actions_for_step(g, cyc, {kEast, kSouth, kWest, kWest}, cyc_next),
-            (std::vector<A>{A::kWait, A::kWait, A::kWait, A::kClockwise}));
-  EXPECT_THROW(rotation_actions_for_step(g, {g.cell(0, 0)}, {kEast}, {g.cell(2, 0)}), std::logic_error);
+TEST(LorrIo, ErrandsOfZeroLengthCountAsInTheStartKit) {
+  // One agent in a corridor of 3 starting at its west end, tasks [0, 0, 2, 2] (linear ids):
+  // finished by standing on them after a step, as the Start-Kit's BaseSystem::move checks.
+  // mapf: t = 1 (task on the start cell), 2 (equal to the previous one), 4, 5, then cell 0 at 7.
+  LorrFiles f;
+  f.write("maps/c.map", "type octile\nheight 1\nwidth 3\nmap\n...\n");
+  f.write("a.txt", "1\n0\n");
+  f.write("t.txt", "4\n0\n0\n2\n2\n");
+  f.write("c.json", R"({"mapFile": "maps/c.map", "agentFile": "a.txt", "teamSize": 1, "taskFile": "t.txt"})");
+  const LorrProblem p = load_lorr_problem(f.path("c.json"));
+  SimResult r = run_lorr(p, 7, ActionModel::kMapf);
+  EXPECT_EQ(r.goals_reached, 5);
+  EXPECT_DOUBLE_EQ(r.free_flow_throughput, 5.0 / 7);
+  // Rotation, facing east: the same until t = 5, then a half turn (t = 6, 7) and two steps west.
+  EXPECT_EQ(run_lorr(p, 8, ActionModel::kRotation).goals_reached, 4);
+  std::vector<std::vector<Cell>> goals;
+  r = run_lorr(p, 9, ActionModel::kRotation, &goals);
+  EXPECT_EQ(r.goals_reached, 5);
+  const nlohmann::json out = lorr_output(p.grid, r.paths, goals, 1, {{0, 1, 2, 3, 4, 5}}, &r.headings);
+  EXPECT_EQ(out["numTaskFinished"], 5);
+  const std::string moves = out["actualPaths"][0];  // the half turn either way
+  EXPECT_TRUE(moves == "W,W,F,F,W,R,R,F,F" || moves == "W,W,F,F,W,C,C,F,F") << moves;
+  EXPECT_EQ(out["events"][0], nlohmann::json::parse(R"([[0,0,"assigned"],[0,1,"finished"],[1,1,"assigned"],
+      [1,2,"finished"],[2,2,"assigned"],[2,4,"finished"],[3,4,"assigned"],[3,5,"finished"],[4,5,"assigned"],
+      [4,9,"finished"],[5,9,"assigned"]])"));
 }
 
-TEST(LorrIo, RotationActionsOfAPlannerStayValidStepAfterStep) {
-  // PIBT on warehouse-10-20-10-2-1 with 150 agents for 150 steps, its steps executed as MAPF_T
-  // actions: every executed step is valid, agents only move along their heading, and they
-  // still deliver (turning costs time, it does not stop them).
-  Grid w = Grid::load(std::string(GDRHCR_SOURCE_DIR) + "/maps/warehouse-10-20-10-2-1.map");
-  DistTable dist(w);
-  Params params;
-  const int n = 150;
-  auto planner = make_planner("pibt", params, w, n, 1);
-  RandomNavigationStream tasks(w, 2);
-  std::vector<Cell> pos = random_starts(w, n, 5), next(n);
-  std::vector<Heading> heading(n);
-  for (int i = 0; i < n; ++i) heading[i] = static_cast<Heading>(i % 4);
-  std::vector<std::vector<Cell>> goals(n);
-  for (int i = 0; i < n; ++i) goals[i] = {tasks.next_goal(i, pos[i])};
-  StepValidator validator(w, ActionModel::kRotation);
-  long reached = 0, forward = 0;
-  for (int t = 0; t < 150; ++t) {
-    std::fill(next.begin(), next.end(), kNoCell);
-    planner->plan_step(WorldView{w, dist, t, pos, goals}, next);
-    const auto act = rotation_actions_for_step(w, pos, heading, next);
-    std::vector<Cell> moved = pos;
-    std::vector<Heading> turned = heading;
-    for (int i = 0; i < n; ++i) {
-      const Pose p = apply_action(w, Pose{pos[i], heading[i]}, act[i]);
-      moved[i] = p.cell, turned[i] = p.heading;
-      ASSERT_TRUE(moved[i] == pos[i] || moved[i] == next[i]) << "agent " << i << " left its planned cell";
-      forward += moved[i] != pos[i];
-    }
-    ASSERT_NO_THROW(validator.require_valid(pos, moved, t, &heading, &turned));
-    pos = moved;
-    heading = turned;
-    for (int i = 0; i < n; ++i)
-      if (pos[i] == goals[i][0]) ++reached, goals[i][0] = tasks.next_goal(i, pos[i]);
+TEST(LorrIo, UnreachableTasksAreAssignedAndHoldTheirAgent) {
+  // "..@..": agent 0 on the left gets task 0 on the right, which it can never reach, and keeps
+  // it (the Start-Kit assigns it and checks only the front task); agent 1 on the right finishes
+  // one task per step (tasks[1] = 4, tasks[3] = 3, alternating). Every planner copes (RHCR,
+  // knowing one goal ahead, waits on a reached goal until its next replanning, every alpha steps).
+  LorrFiles f;
+  f.write("maps/s.map", "type octile\nheight 1\nwidth 5\nmap\n..@..\n");
+  f.write("a.txt", "2\n0\n3\n");
+  f.write("t.txt", "4\n4\n4\n0\n3\n");
+  f.write("s.json", R"({"mapFile": "maps/s.map", "agentFile": "a.txt", "teamSize": 2, "taskFile": "t.txt"})");
+  const LorrProblem p = load_lorr_problem(f.path("s.json"));
+  for (const std::string name : {"pibt", "rhcr", "gd-rhcr"}) {
+    std::vector<std::vector<Cell>> goals;
+    const SimResult r = run_lorr(p, 10, ActionModel::kMapf, &goals, name);
+    EXPECT_EQ(goals[0], std::vector<Cell>{4}) << name;  // never replaced
+    EXPECT_EQ(goals[1].size(), size_t(r.goals_reached) + 1) << name;
+    EXPECT_EQ(r.goals_reached, name == "rhcr" ? 2 : 10) << name;
   }
-  EXPECT_GT(forward, 150 * 20);
-  EXPECT_GT(reached, 30);
+}
+
+TEST(LorrIo, OnlyAtAndTBlockAsInTheStartKit) {
+  // The Start-Kit's Grid blocks '@' and 'T' only; MovingAI's 'O' and 'W' (blocked by Grid::load)
+  // are free in a LoRR map, so an agent may start on them.
+  LorrFiles f;
+  f.write("maps/o.map", "type octile\nheight 2\nwidth 4\nmap\n.OW@\nTSE.\n");
+  const Grid ours = Grid::load(f.path("maps/o.map"));
+  const Grid lorr = load_lorr_map(f.path("maps/o.map"));
+  EXPECT_FALSE(ours.is_free(ours.cell(1, 0)));
+  EXPECT_FALSE(ours.is_free(ours.cell(2, 0)));
+  for (int x : {0, 1, 2}) EXPECT_TRUE(lorr.is_free(lorr.cell(x, 0))) << x;
+  EXPECT_FALSE(lorr.is_free(lorr.cell(3, 0)));
+  EXPECT_FALSE(lorr.is_free(lorr.cell(0, 1)));
+  for (int x : {1, 2, 3}) EXPECT_TRUE(lorr.is_free(lorr.cell(x, 1))) << x;
+  f.write("a.txt", "1\n2\n");  // (2,0), a 'W'
+  f.write("t.txt", "1\n1\n");
+  f.write("o.json", R"({"mapFile": "maps/o.map", "agentFile": "a.txt", "teamSize": 1, "taskFile": "t.txt"})");
+  EXPECT_EQ(load_lorr_problem(f.path("o.json")).starts, std::vector<Cell>{2});
+  // The Start-Kit's other header, "rows,cols"; bad headers and short rows are named.
+  f.write("maps/k.map", "2,3\n.@.\nT..\n");
+  EXPECT_EQ(load_lorr_map(f.path("maps/k.map")).free_cells(), (std::vector<Cell>{0, 2, 4, 5}));
+  auto error = [&](const std::string& text) {
+    f.write("maps/bad.map", text);
+    try {
+      load_lorr_map(f.path("maps/bad.map"));
+    } catch (const LorrError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  EXPECT_NE(error("type octile\nheight 2\nwidth 4\nmap\n....\n..\n").find("bad.map:6: row 1 has 2 cells"), std::string::npos);
+  EXPECT_NE(error("type octile\nheight x\n").find("bad.map:2: height must be a positive integer"), std::string::npos);
+  EXPECT_NE(error("2,3\n...\n").find("the map has 1 rows"), std::string::npos);
+  EXPECT_NE(error("hello\n").find("bad.map:1: expected a MovingAI header"), std::string::npos);
+  EXPECT_NE(error("1,2\n@T\n").find("bad.map"), std::string::npos);  // no free cell
+}
+
+TEST(LorrIo, RotationOutputIsTheStartKitsAndReplaysExactly) {
+  // A rotation run written as the Start-Kit writes its output: MAPF_T, F/R/C/W, start facing east,
+  // plannerPaths; read back (cells and headings) it replays the run exactly.
+  LorrFiles f;
+  const LorrProblem p = load_lorr_problem(f.path("problem.json"));
+  std::vector<std::vector<Cell>> goals;
+  const SimResult r = run_lorr(p, 40, ActionModel::kRotation, &goals);
+  const nlohmann::json out = nlohmann::json::parse(lorr_output(p.grid, r.paths, goals, 2, {}, &r.headings).dump());
+  EXPECT_EQ(out["actionModel"], "MAPF_T");
+  EXPECT_EQ(out["start"][1], nlohmann::json({1, 5, "E"}));
+  EXPECT_EQ(out["plannerPaths"], out["actualPaths"]);
+  std::set<char> letters;
+  for (auto& s : out["actualPaths"])
+    for (char c : s.get<std::string>()) letters.insert(c);
+  EXPECT_EQ(letters, (std::set<char>{',', 'F', 'R', 'C', 'W'}));
+  std::vector<std::vector<Heading>> headings;
+  EXPECT_EQ(read_lorr_paths(p.grid, out, "rotation", &headings), r.paths);
+  EXPECT_EQ(headings, r.headings);
+  EXPECT_EQ(out["numTaskFinished"].get<long>(), r.goals_reached);
+  nlohmann::json bad = out;
+  bad["actualPaths"][0] = "F,L";
+  EXPECT_THROW(read_lorr_paths(p.grid, bad, "x"), LorrError);  // L is no MAPF_T letter
+  bad["start"][0][2] = "X";
+  EXPECT_THROW(read_lorr_paths(p.grid, bad, "x"), LorrError);
 }

@@ -6,21 +6,22 @@
 //   "teamSize"                          number of agents (the first teamSize of the agent file),
 //   "numTasksReveal" (default 1)        tasks known ahead per agent (our lookahead),
 //   "taskAssignmentStrategy" (default "roundrobin"; also "roundrobin_fixed", "greedy").
-// The map is MovingAI format (LoRR: `@` and `T` block, `.`, `E`, `S` are free; our Grid reads
-// them so). Agent and task files: a first line with the count n, then n lines of one linear
+// The map is read as the Start-Kit reads it (load_lorr_map: only `@` and `T` block). Agent and task files: a first line with the count n, then n lines of one linear
 // cell id each, id = row * width + col; blank lines and lines starting with '#' are skipped.
 //
-// Out: our run as a LoRR-style output JSON in the no-rotation model, the format LoRR's PlanViz
-// replays (MAPF-Competition/PlanViz, commit c03a1d6, script/plan_config.py PlanConfig2023):
-//   "actionModel" "MAPF", "AllValid" "Yes", "teamSize", "start" [[row, col, "N/A"], ...],
-//   "numTaskFinished", "makespan" (timesteps simulated), "actualPaths" (one string per agent,
-//   moves separated by commas), "errors" [] (a collision aborts our runs), "events" (per agent,
-//   [[task id, timestep, "assigned" | "finished"], ...]), "tasks" [[id, row, col], ...].
-// Move letters (PlanViz script/util.py state_transition_mapf and plan_config.py
-// transition_state): "R" col + 1 (east), "L" col - 1 (west), "U" row + 1 ("south (down)": rows
-// grow downwards, so U moves DOWN the map as drawn), "D" row - 1 (north, up the map), "W" wait.
-// PlanViz's tracker_transfer.py swaps U and D when it converts MAPF-tracker paths, confirming
-// that its U is row + 1.
+// Out: our run as the Start-Kit's output JSON (src/CompetitionSystem.cpp saveResults), which
+// LoRR's PlanViz replays (MAPF-Competition/PlanViz, script/plan_config.py):
+//   "actionModel" "MAPF_T" (rotation) or "MAPF", "AllValid" "Yes", "teamSize",
+//   "start" [[row, col, orientation], ...] (E/S/W/N in MAPF_T, "N/A" in MAPF),
+//   "numTaskFinished", "sumOfCost" and "makespan" (the Start-Kit's: timesteps in which an agent
+//   had a task, summed and the largest), "actualPaths" and "plannerPaths" (one string per agent,
+//   actions separated by commas; the same, as we execute what we plan), "errors" [] (a
+//   collision aborts our runs), "events" (per agent, [[task id, timestep, "assigned" |
+//   "finished"], ...]), "tasks" [[id, row, col], ...] by id.
+// Letters: MAPF_T the Start-Kit's F forward, R clockwise, C counter-clockwise, W wait (T: a
+// step the planner timed out, read as a wait). MAPF (PlanViz script/util.py
+// state_transition_mapf): "R" col + 1 (east), "L" col - 1 (west), "U" row + 1 (rows grow
+// downwards, so U moves DOWN the map as drawn), "D" row - 1, "W" wait.
 #pragma once
 
 #include <cstdint>
@@ -53,13 +54,11 @@ struct LorrProblem {
   std::vector<Cell> tasks;
 };
 
-// A valid step of our MAPF planners (pos -> next, Planner::plan_step) as actions of the rotation
-// model (action_model.hpp, LoRR's MAPF_T), kept valid conservatively: an agent facing its next cell moves forward; one not facing it turns
-// towards it and stays; an agent whose next cell is the cell of an agent that stays, stays too
-// (transitively, so no vertex conflict appears). The MAPF step has no swaps, so the result has
-// none. A half turn starts clockwise.
-std::vector<Action> rotation_actions_for_step(const Grid& grid, const std::vector<Cell>& pos,
-                                              const std::vector<Heading>& headings, const std::vector<Cell>& next);
+// A LoRR map as the Start-Kit reads it (src/Grid.cpp): a MovingAI header ("type ...", "height H",
+// "width W", "map") or a first line "rows,cols", then the rows; only '@' and 'T' are blocked,
+// every other symbol is free (MovingAI's 'O' and 'W' included, unlike Grid::load). Throws
+// LorrError naming the file and line for a malformed header or a row shorter than the width.
+Grid load_lorr_map(const std::string& path);
 
 // Reads the problem JSON and the files it names. Throws LorrError (or MapError for the map).
 LorrProblem load_lorr_problem(const std::string& problem_path);
@@ -74,6 +73,7 @@ class RecordingTaskStream : public TaskStream {
   explicit RecordingTaskStream(TaskStream& inner) : inner_(inner) {}
   std::string name() const override { return inner_.name(); }
   Cell next_goal(int agent, Cell current) override;
+  bool is_errand(int agent, Cell goal, Cell from) const override { return inner_.is_errand(agent, goal, from); }
   std::unique_ptr<TaskStream> clone_fresh() const override { return inner_.clone_fresh(); }
   const std::vector<std::vector<Cell>>& goals() const { return goals_; }
   TaskStream& inner() { return inner_; }
@@ -88,15 +88,19 @@ class RecordingTaskStream : public TaskStream {
 // and task ids per agent (TaskListStream::assigned_ids; empty = number the tasks ourselves).
 // Events are rebuilt with the simulator's rule: the first `lookahead` goals are assigned at
 // t = 0; when an agent stands on its current goal at time t it is finished at t and the next
-// goal is assigned at t. A goal equal to the cell it was drawn from (no task) is not reported.
+// goal is assigned at t. A goal with id -1 (no task) is not reported; without ids, a goal equal
+// to the cell it was drawn from is not. headings[i][t] (SimResult::headings) for a run in the
+// rotation model, null for mapf.
 nlohmann::json lorr_output(const Grid& grid, const std::vector<std::vector<Cell>>& paths,
                            const std::vector<std::vector<Cell>>& goals, int lookahead,
-                           const std::vector<std::vector<long>>& task_ids = {});
+                           const std::vector<std::vector<long>>& task_ids = {},
+                           const std::vector<std::vector<Heading>>* headings = nullptr);
 
-// The executed paths of a LoRR output JSON (start + actualPaths replayed with the letters
-// above), checked against the grid: a bad letter, a move off the map or into an obstacle is a
-// LorrError naming `name`, the agent and the move. paths[i][t] as above.
-std::vector<std::vector<Cell>> read_lorr_paths(const Grid& grid, const nlohmann::json& output,
-                                               const std::string& name);
+// The executed paths of a LoRR output JSON, ours or the Start-Kit's (start + actualPaths
+// replayed with the letters above; MAPF_T or MAPF), checked against the grid: a bad letter, a
+// move off the map or into an obstacle is a LorrError naming `name`, the agent and the move.
+// paths[i][t] as above; headings[i][t] too when asked (all east in MAPF).
+std::vector<std::vector<Cell>> read_lorr_paths(const Grid& grid, const nlohmann::json& output, const std::string& name,
+                                               std::vector<std::vector<Heading>>* headings = nullptr);
 
 }  // namespace gdrhcr

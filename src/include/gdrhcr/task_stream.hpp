@@ -25,6 +25,13 @@ class TaskStream {
   // map allows, and is always reachable from it). Called in order for each agent; agents are
   // independent. Throws std::invalid_argument when `current` is not a free cell.
   virtual Cell next_goal(int agent, Cell current) = 0;
+  // Whether `goal`, just returned by next_goal(agent, from), is an errand: counted when reached.
+  // By default a goal equal to `from` is not (an agent alone in a one-cell region gets its own
+  // cell). TaskListStream says otherwise (see there).
+  virtual bool is_errand(int agent, Cell goal, Cell from) const {
+    (void)agent;
+    return goal != from;
+  }
   // A fresh stream with the same seed and rules, at the start of every agent's sequence.
   virtual std::unique_ptr<TaskStream> clone_fresh() const = 0;
 };
@@ -75,18 +82,22 @@ class PickupDeliveryStream : public TaskStream {
   std::vector<uint8_t> next_is_delivery_;
 };
 
-// A fixed task list run in order, as the League of Robot Runners (LoRR) Start-Kit does
-// (2023 rules, src/CompetitionSystem.cpp at tag 2023-archive; the problem JSON's
-// "taskAssignmentStrategy"), for a team of `team_size` agents and m tasks:
-//  - RoundRobin ("roundrobin", InfAssignSystem): agent k's j-th task has id j * team_size + k
-//    and cell tasks[id % m]; the list repeats forever. Deterministic per agent.
-//  - RoundRobinFixed ("roundrobin_fixed"): the same ids, but each task only once: agent k
-//    gets tasks k, k + team_size, ... and then none.
+// A fixed task list run in order, as the League of Robot Runners (LoRR) Start-Kit v1.1.5 does
+// (src/CompetitionSystem.cpp and src/driver.cpp; the problem JSON's "taskAssignmentStrategy"),
+// for a team of `team_size` agents and m tasks:
+//  - RoundRobin ("roundrobin", InfAssignSystem): agent k's j-th task is tasks[(j * team_size + k)
+//    % m]; the list repeats forever. Task ids count assignments in order (the Start-Kit's
+//    task_id: the simulator assigns agents in id order, as the Start-Kit's update_tasks does).
+//  - RoundRobinFixed ("roundrobin_fixed", FixedAssignSystem): task i goes to agent i % team_size,
+//    once; ids are agent-major (agent 0's tasks first). Then none.
 //  - Greedy ("greedy", TaskAssignSystem): one shared queue; the next task goes to whichever
-//    agent asks next (in the simulator, agents in id order each step), each task once.
-// A task whose cell the agent cannot reach (another 4-connected region) is skipped. An agent
-// without a task (list exhausted) gets its own cell as goal, which scores nothing, and its id
-// is -1. assigned_ids(agent) lists the ids handed to the agent so far, in order.
+//    agent asks next (in the simulator, agents in id order each step), each task once; its id
+//    is its place in the list.
+// As in the Start-Kit, every task is an errand: one on the agent's own cell, or equal to its
+// previous one (length zero), is finished by standing on it after a step and counts; a task the
+// agent cannot reach (another 4-connected region) is assigned all the same and holds the agent
+// for good. An agent without a task (list exhausted) gets its own cell as goal, which is no
+// errand, and id -1. assigned_ids(agent) lists the ids handed to the agent so far, in order.
 class TaskListStream : public TaskStream {
  public:
   enum class Strategy { RoundRobin, RoundRobinFixed, Greedy };
@@ -95,6 +106,7 @@ class TaskListStream : public TaskStream {
   TaskListStream(const Grid& grid, std::vector<Cell> tasks, int team_size, Strategy strategy);
   std::string name() const override { return "lorr-tasks"; }
   Cell next_goal(int agent, Cell current) override;
+  bool is_errand(int agent, Cell goal, Cell from) const override;
   std::unique_ptr<TaskStream> clone_fresh() const override;
   const std::vector<Cell>& tasks() const { return tasks_; }
   Strategy strategy() const { return strategy_; }
@@ -109,7 +121,9 @@ class TaskListStream : public TaskStream {
   int team_size_;
   Strategy strategy_;
   long next_shared_ = 0;                 // Greedy: next queue position
+  long next_id_ = 0;                     // RoundRobin: assignments so far
   std::vector<long> next_round_;         // RoundRobin*: per agent, tasks drawn so far (j)
+  std::vector<long> fixed_first_id_;     // RoundRobinFixed: per agent, the id of its first task
   std::vector<std::vector<long>> ids_;   // per agent, ids handed out
 };
 
