@@ -52,7 +52,6 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   }
   preferred_ = preferred;
   immovable_ = world.immovable;
-  next_headings_ = world.rotation() ? world.next_headings : nullptr;
   if (table_id_ != world.dist.id()) {  // rows kept from another table: drop them
     for (auto& r : rows_) r.reset();
     table_id_ = world.dist.id();
@@ -72,10 +71,17 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
     occupied_now_[world.positions[i]] = i;
     next[i] = kNoCell;
   }
+  if (world.rotation()) {
+    plan_operations(world, next, fixed_moves);
+    for (int i : order_) occupied_now_[world.positions[i]] = kFree;
+    preferred_ = nullptr;
+    immovable_ = nullptr;
+    return;
+  }
   // Immovable agents stay: their cell is taken for t+1, so nobody pushes them or moves in.
   if (world.immovable)
     for (int i : order_)
-      if ((*world.immovable)[i]) stay(world, i, world.pose(i).heading, next);
+      if ((*world.immovable)[i]) next[i] = world.positions[i], occupied_next_[world.positions[i]] = i;
   // Agents outside this call keep their moves; their cells at t and t+1 are off limits, which
   // rules out both vertex and swap conflicts with them.
   for (auto& [from, to] : fixed_moves) {
@@ -84,16 +90,9 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   }
   if (world.blocked)  // blocked cells (a late robot still leaving them): nobody enters
     for (Cell c : *world.blocked) occupied_next_[c] = kFixed;
-  if (world.rotation()) {
-    give_way_.resize(n);
-    std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) {
-      return effective_priority(world, a) > effective_priority(world, b);
-    });
-  } else {
-    std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) { return priority_[a] > priority_[b]; });
-  }
+  std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) { return priority_[a] > priority_[b]; });
   for (int i : order_)
-    if (next[i] == kNoCell) world.rotation() ? push_rotation(world, i, -1, next) : push(world, i, -1, next);
+    if (next[i] == kNoCell) push(world, i, -1, next);
   // Reset the scratch tables touched this call, so the next call starts clean in O(agents).
   for (int i : order_) {
     occupied_now_[world.positions[i]] = kFree;
@@ -107,7 +106,6 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
     for (Cell c : *world.blocked) occupied_next_[c] = kFree;
   preferred_ = nullptr;
   immovable_ = nullptr;
-  next_headings_ = nullptr;
 }
 
 // Candidates: the neighbours and staying put, the preferred cell first, then nearest to the
@@ -234,130 +232,6 @@ int PibtStep::swap_partner(const WorldView& world, int ai, Cell best) const {
     if (needs_swap(here, best, *rows_[ak], *rows_[ai]) && can_swap(best, here)) return ak;
   }
   return -1;
-}
-
-// --- Rotation model -------------------------------------------------------------------------
-
-// Agent ai keeps its cell for t+1, facing h.
-void PibtStep::stay(const WorldView& world, int ai, Heading h, std::vector<Cell>& next) {
-  const Cell here = world.positions[ai];
-  occupied_next_[here] = ai;
-  next[ai] = here;
-  if (next_headings_) (*next_headings_)[ai] = h;
-}
-
-// F into the faced cell, pushing its occupant on (ai's pusher is aj, -1 for none). True when ai
-// moves; false leaves ai undecided (or its reservation overwritten by a blocker that stays).
-bool PibtStep::try_forward(const WorldView& world, int ai, int aj, std::vector<Cell>& next) {
-  const Cell here = world.positions[ai];
-  const Heading h = (*world.headings)[ai];
-  const Cell u = forward_cell(grid_, here, h);
-  if (u == kNoCell || occupied_next_[u] != kFree) return false;
-  const int ak = occupied_now_[u];
-  if (ak >= 0 && ak != ai && (ak == aj || next[ak] == here)) return false;  // would swap cells
-  occupied_next_[u] = ai;
-  next[ai] = u;
-  if (next_headings_) (*next_headings_)[ai] = h;
-  if (ak >= 0 && ak != ai && next[ak] == kNoCell && !push_rotation(world, ak, ai, next)) {
-    next[ai] = kNoCell;
-    return false;
-  }
-  return true;
-}
-
-// The heading to turn to when ai cannot leave now: towards the free neighbour (not its pusher's
-// cell, nor a cell held by a fixed move) nearest ai's goal; ai's own heading when it faces it.
-Heading PibtStep::way_out(const WorldView& world, int ai, int pusher) {
-  const Cell here = world.positions[ai];
-  const Heading h = (*world.headings)[ai];
-  const Cell pushed_from = pusher >= 0 ? world.positions[pusher] : kNoCell;
-  const DistRow& row = *rows_[ai];
-  Heading best = kNoHeading;
-  int best_key = INT32_MAX;
-  for (Cell u : grid_.neighbours(here)) {
-    if (u == pushed_from || occupied_next_[u] == kFixed) continue;
-    const int a = occupied_now_[u];
-    if (a >= 0 && immovable_ && (*immovable_)[a]) continue;
-    const Heading hu = heading_of_move(grid_, here, u);
-    const int key = (a >= 0 ? 1 << 28 : 0) + std::min(row[u], (1 << 24) - 1) * 4 + turn_steps(h, hu);
-    if (key < best_key) best_key = key, best = hu;
-  }
-  return best == kNoHeading ? h : best;
-}
-
-namespace {
-// One quarter turn from h towards `target` (h itself when facing it).
-Heading turn_towards(Heading h, Heading target) {
-  if (target == h || target == kNoHeading) return h;
-  return ((target - h) & 3) == 3 ? rotate_ccw(h) : rotate_cw(h);
-}
-}  // namespace
-
-// The priority an agent plans with: its own, or the one it inherited while giving way.
-double PibtStep::effective_priority(const WorldView& world, int i) const {
-  const GiveWay& g = give_way_[i];
-  if (g.until < world.timestep || g.at != world.positions[i]) return priority_[i];
-  return std::max(priority_[i], g.priority);
-}
-
-// ai's actions, best first: the preferred cell's action (a guidance path), then nearest to the
-// goal from the state each leads to; among equals (kFreeFirst) one whose next faced cell nobody
-// stands on, then a random order. Returns how many (F only when ai faces a free cell).
-int PibtStep::order_actions(const WorldView& world, int ai, Action* acts) {
-  const Pose p = world.pose(ai);
-  const DistRow& row = *rows_[ai];
-  const GiveWay& g = give_way_[ai];
-  const bool giving_way = g.until >= world.timestep && g.at == p.cell;
-  const Cell pref = giving_way ? kNoCell : preferred_ ? (*preferred_)[ai] : kNoCell;
-  const Heading pref_h = giving_way ? g.toward : pref == kNoCell ? kNoHeading : heading_of_move(grid_, p.cell, pref);
-  int m = 0;
-  if (forward_cell(grid_, p.cell, p.heading) != kNoCell) acts[m++] = Action::kForward;
-  acts[m++] = Action::kClockwise;
-  acts[m++] = Action::kCounterClockwise;
-  acts[m++] = Action::kWait;
-  std::shuffle(acts, acts + m, rng_);
-  const bool free_first = opt_.tie_break != PibtOptions::TieBreak::kRandom;
-  int key[4];
-  for (int k = 0; k < m; ++k) {
-    const Pose q = apply_action(grid_, p, acts[k]);
-    bool preferred = false;
-    if (pref == p.cell) preferred = acts[k] == Action::kWait;
-    else if (pref_h != kNoHeading)
-      preferred = (acts[k] == Action::kForward && pref_h == p.heading) ||
-                  (acts[k] != Action::kForward && q.heading != p.heading &&
-                   turn_steps(q.heading, pref_h) < turn_steps(p.heading, pref_h));
-    const Cell faced = forward_cell(grid_, q.cell, q.heading);
-    const bool busy = free_first && faced != kNoCell && occupied_now_[faced] >= 0 && occupied_now_[faced] != ai;
-    key[k] = (preferred ? 0 : 1 << 30) + std::min(row.at(q.cell, q.heading), (1 << 24) - 1) * 2 + (busy ? 1 : 0);
-  }
-  for (int k = 1; k < m; ++k)
-    for (int j = k; j > 0 && key[j] < key[j - 1]; --j) std::swap(key[j], key[j - 1]), std::swap(acts[j], acts[j - 1]);
-  return m;
-}
-
-// PIBT's push in the rotation model. Pushed (aj >= 0): only F vacates the cell; otherwise the
-// agent turns towards its way out and the push fails. Not pushed: its best action that works.
-bool PibtStep::push_rotation(const WorldView& world, int ai, int aj, std::vector<Cell>& next) {
-  const Heading h = (*world.headings)[ai];
-  if (aj >= 0) {
-    if (try_forward(world, ai, aj, next)) return true;
-    const Heading out = way_out(world, ai, aj);
-    stay(world, ai, turn_towards(h, out), next);
-    give_way_[ai] = {world.positions[ai], out, effective_priority(world, aj), world.timestep + turn_steps(h, out) + 1};
-    return false;
-  }
-  Action acts[4];
-  const int m = order_actions(world, ai, acts);
-  for (int k = 0; k < m; ++k) {
-    if (acts[k] == Action::kForward) {
-      if (try_forward(world, ai, -1, next)) return true;
-      continue;
-    }
-    stay(world, ai, apply_action(grid_, {world.positions[ai], h}, acts[k]).heading, next);
-    return true;
-  }
-  stay(world, ai, h, next);
-  return true;
 }
 
 }  // namespace gdrhcr

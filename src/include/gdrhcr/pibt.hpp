@@ -14,21 +14,20 @@
 // needs to get past it, and a junction where they can pass is reachable, the agent walks away
 // from its goal and pulls the other one after it, until they reach the junction and pass.
 //
-// Rotation model (issue 23, LoRR's MAPF_T; action_model.hpp): PIBT over (cell, heading) states.
-// An agent's candidates are its actions: forward (F) into the cell it faces, a quarter turn either
-// way (R, C) or a wait (W), ordered by the distance to its goal from the state each leads to
-// (DistRow::at, turns counted). Only F leaves the cell, so an agent that turns or waits keeps its
-// cell for t+1, and priority inheritance sees it: an agent pushed out of its cell can vacate it
-// only by F into the cell it faces (never into its pusher's cell). When it cannot (it faces a wall,
-// an obstacle, its pusher or a cell it cannot clear), the push fails at once, the pusher tries its
-// next action, and the pushed agent turns towards its best way out (the free neighbour nearest its
-// own goal, not the pusher's cell). Giving way then takes more than one step, so the push is kept
-// as a short operation (turn, [turn,] forward; after EPIBT's multi-step operations, Nagorny, LoRR
-// 2024 winner, arXiv 2511.09193): until it has left its cell or the operation's steps are over, the
-// pushed agent keeps the pusher's priority when that is higher and prefers the operation's next
-// action over its own way. Without that it turns back towards its goal at the next step, in front
-// of the same pusher, for ever. Swap emulation is off in this model (its pull needs a sideways
-// move).
+// Rotation model (issue 23, LoRR's MAPF_T; action_model.hpp): PIBT over (cell, heading) states,
+// with short operations. Only forward (F) leaves a cell, so an agent that must turn before it can
+// move keeps its cell for a step or two, and giving way takes several steps: turn, [turn,] forward.
+// After EPIBT (Nagorny et al., LoRR 2024 winner, arXiv 2511.09193), each agent therefore chooses an
+// operation, a sequence of kOpSteps actions (F, R, C, W; no turn undoing the last one, no turn at
+// the end), ordered by the distance with turns (DistRow::at) from the state it ends in, and the
+// cells it holds at t+1 .. t+kOpSteps are reserved. Priority inheritance runs over operations: an
+// operation that meets the reserved cells (or crossing moves) of lower agents not yet planned
+// displaces them, and each must find an operation of its own around the higher ones (recursively);
+// if one cannot, everything the attempt changed is undone and the next operation is tried. Every
+// agent starts the step holding its cell (WWW), so an agent nobody displaces simply waits. Only
+// the first action is executed; the step after plans again. Recursion depth and attempts per agent
+// are bounded (kOpDepth, kOpBudget): a bounded attempt fails like a blocked one. Swap emulation is
+// off in this model.
 #pragma once
 
 #include <random>
@@ -77,25 +76,36 @@ class PibtStep {
   double priority(int i) const { return priority_[i]; }
   const PibtOptions& options() const { return opt_; }
   long swaps() const { return swaps_; }
+  static constexpr int kOpSteps = 3;  // actions per operation in the rotation model
 
  private:
   bool push(const WorldView& world, int ai, int aj, std::vector<Cell>& next);
-  // Rotation model (see above).
-  bool push_rotation(const WorldView& world, int ai, int aj, std::vector<Cell>& next);
-  bool try_forward(const WorldView& world, int ai, int aj, std::vector<Cell>& next);
-  void stay(const WorldView& world, int ai, Heading h, std::vector<Cell>& next);
-  int order_actions(const WorldView& world, int ai, Action* acts);
-  Heading way_out(const WorldView& world, int ai, int pusher);
-  double effective_priority(const WorldView& world, int i) const;
-  // Rotation: an agent giving way (see above): where it stands, the heading it leaves by, the
-  // priority it inherited and the last timestep of the operation.
-  struct GiveWay {
-    Cell at = kNoCell;
-    Heading toward = kNoHeading;
-    double priority = 0;
-    int until = -1;
+
+  // Rotation model: operations (see above; pibt_operations.cpp).
+  static constexpr int kOpDepth = 12;    // displaced agents planned recursively, at most this deep
+  static constexpr int kOpBudget = 400;  // operation plans per agent of the main loop
+  struct OpPath {
+    Cell cell[kOpSteps + 1];
+    Heading heading[kOpSteps + 1];
   };
-  std::vector<GiveWay> give_way_;
+  void plan_operations(const WorldView& world, std::vector<Cell>& next,
+                       const std::vector<std::pair<Cell, Cell>>& fixed_moves);
+  bool plan_operation(const WorldView& world, int ai, int depth);
+  int order_operations(const WorldView& world, int ai, OpPath* paths);
+  bool conflicts_of(int ai, const OpPath& p, int* out, int& m) const;
+  void reserve(int ai, const OpPath& p);
+  void release(int ai);
+  void set_res(int k, Cell c, int v);
+  void rollback(size_t ints, size_t paths);
+  int& res(int k, Cell c) { return res_[size_t(k - 1) * grid_.num_cells() + c]; }
+  int res(int k, Cell c) const { return res_[size_t(k - 1) * grid_.num_cells() + c]; }
+  std::vector<int> res_;          // kOpSteps x cells: who holds cell c at t+k; -1 free, kFixed
+  std::vector<OpPath> op_path_;   // per agent: the operation it holds
+  std::vector<int> locked_;       // per agent: == lock_stamp_ once planned this call
+  int lock_stamp_ = 0;
+  std::vector<std::pair<int*, int>> undo_ints_;   // (where, old value), for rollback
+  std::vector<std::pair<int, OpPath>> undo_paths_;  // (agent, old operation)
+  long op_plans_ = 0;
   void order_candidates(int ai, Cell* cand, int m);
   int swap_partner(const WorldView& world, int ai, Cell best) const;
   bool needs_swap(Cell pusher_at, Cell puller_at, const DistRow& pusher_row,
@@ -117,7 +127,6 @@ class PibtStep {
   std::vector<Cell> goal_of_;                         // each agent's goal, this step
   const std::vector<Cell>* preferred_ = nullptr;
   const std::vector<uint8_t>* immovable_ = nullptr;
-  std::vector<Heading>* next_headings_ = nullptr;  // rotation: the call's output headings
   std::vector<int> order_;
   long swaps_ = 0;
 };
