@@ -10,8 +10,8 @@
 # Environment: ROBOTS (300), DURATION (s per run, 180), P_DELAY (0.01), MAX_DELAY (20 ticks),
 # SPEED_SPREAD (0: every robot takes move_fraction of a tick per move), PLANNER (gd-rhcr),
 # EXECUTIONS (adg, the only execution since issue 22; kept so older command lines still run),
-# SEED (1), OUT (results/delays.json). Needs the workspace built
-# (scripts/ros_build.sh). Holds /tmp/gdrhcr_ros.lock while it runs (one ROS run at a time).
+# SEED (1), OUT (results/delays.json). Installs and builds what it needs (scripts/ros_env.sh;
+# GDRHCR_SKIP_BUILD=1 uses the workspace as it is). Holds /tmp/gdrhcr_ros.lock while it runs (one ROS run at a time).
 set -eo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 ROBOTS=${ROBOTS:-300}
@@ -30,11 +30,9 @@ done
 EXECUTIONS=adg
 SEED=${SEED:-1}
 OUT=${OUT:-$top/results/delays.json}
-ws="${GDRHCR_WS:-$top/.ws}"
-export PATH=/usr/bin:$PATH ROS_HOME="$ws/.ros_home" ROS_IP=127.0.0.1
+# shellcheck source=ros_env.sh
+source "$top/scripts/ros_env.sh"
 export ROS_MASTER_URI=http://127.0.0.1:11712
-# shellcheck disable=SC1091
-source "$ws/devel/setup.bash"
 mkdir -p "$top/results" "$ROS_HOME"
 runs=()
 for ex in $EXECUTIONS; do

@@ -6,18 +6,17 @@
 # overruns, PIBT fallback ticks, busy robots and deliveries per robot count.
 #   bash scripts/bench_ros_full_load.sh                 # ROBOTS="100 500 1000" DURATION=120
 #   ROBOTS="200" DURATION=60 PLANNER=pibt bash scripts/bench_ros_full_load.sh
-# JSON per run: results/ros_full_load_<planner>_<robots>.json. Needs the workspace built
-# (scripts/ros_build.sh). Uses its own ROS master port (11711) so it does not meet other runs.
+# JSON per run: results/ros_full_load_<planner>_<robots>.json. Installs and builds what it needs
+# (scripts/ros_env.sh; GDRHCR_SKIP_BUILD=1 uses the workspace as it is). Uses its own ROS master port (11711) so it does not meet other runs.
 set -eo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 ROBOTS=${ROBOTS:-"100 500 1000"}
 DURATION=${DURATION:-120}
 PLANNER=${PLANNER:-gd-rhcr}
 TICK_RATE=${TICK_RATE:-2.0}
-export PATH=/usr/bin:$PATH ROS_HOME="$top/.ws/.ros_home" ROS_IP=127.0.0.1
+# shellcheck source=ros_env.sh
+source "$top/scripts/ros_env.sh"
 export ROS_MASTER_URI=http://127.0.0.1:11711
-# shellcheck disable=SC1091
-source "$top/.ws/devel/setup.bash"
 mkdir -p "$top/results"
 files=()
 for n in $ROBOTS; do
@@ -25,7 +24,7 @@ for n in $ROBOTS; do
   echo "bench_ros_full_load: $n robots, $PLANNER, ${DURATION}s at ${TICK_RATE} Hz -> $out"
   roslaunch -p 11711 gd_rhcr_planner soak.launch faults:=false num_robots:="$n" planner:="$PLANNER" \
     tick_rate:="$TICK_RATE" duration:="$DURATION" robot_steps:=1000000000 output:="$out" \
-    >"$top/.ws/.ros_home/bench_full_load_$n.log" 2>&1 || true
+    >"$ROS_HOME/bench_full_load_$n.log" 2>&1 || true
   files+=("$out")
 done
 /usr/bin/python3 - "${files[@]}" <<'PY'

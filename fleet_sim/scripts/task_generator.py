@@ -18,9 +18,10 @@ Generation starts once the planner (the node that sent `mapd_cells`) subscribes 
 every subscriber is connected, plus ~connect_delay s (default 0.5), since a task published
 before a connection is up is silently dropped by ROS. Ids start at ~id_base (default 1000000), or
 after the largest id at or above it the planner's `list_tasks` already holds (tasks restored
-from its task store). A task that got no status
-at all within ~ack_timeout s (default 10) is taken as dropped on the way: it no longer counts
-as open (so the load does not slowly decay) and is logged.
+from its task store). A task that got no status at all within ~ack_timeout s (default 10) was
+dropped on the way (a topic drops what is published while the planner restarts): it is sent
+again with the same id, up to ~resends times (default 5; the planner ignores an id it already
+holds), then taken as lost on the way: it no longer counts as open and is logged.
 """
 import random
 import threading
@@ -61,7 +62,9 @@ class TaskGenerator(object):
         self.connect_delay = float(rospy.get_param("~connect_delay", 0.5))
         self.lock = threading.Lock()
         self.open = set()
-        self.unacked = {}  # task id -> time sent, until its first status
+        self.unacked = {}  # task id -> (time sent, task), until its first status
+        self.resent = {}  # task id -> times sent again
+        self.resends = int(rospy.get_param("~resends", 5))
         self.dropped = 0
         self.sent = 0
         self.period = 1.0 / min(self.rate, MAX_TIMER_HZ)
@@ -115,6 +118,7 @@ class TaskGenerator(object):
     def on_status(self, msg):
         with self.lock:
             self.unacked.pop(msg.task_id, None)
+            self.resent.pop(msg.task_id, None)
             if msg.state in FINISHED:
                 self.open.discard(msg.task_id)
 
@@ -129,14 +133,25 @@ class TaskGenerator(object):
         return t
 
     def on_timer(self, _event):
-        batch = []
+        batch, again = [], []  # new tasks, tasks sent again
         now = rospy.get_time()
         with self.lock:
             if self.ack_timeout > 0:
-                late = [i for i, t in self.unacked.items() if now - t > self.ack_timeout]
+                late = [i for i, (t, _task) in self.unacked.items() if now - t > self.ack_timeout]
                 for i in late:
+                    task = self.unacked[i][1]
+                    if self.resent.get(i, 0) < self.resends:
+                        self.resent[i] = self.resent.get(i, 0) + 1
+                        self.unacked[i] = (now, task)
+                        again.append(task)
+                        continue
                     del self.unacked[i]
+                    self.resent.pop(i, None)
                     self.open.discard(i)
+                late = [i for i in late if i not in self.unacked]
+                if again:
+                    rospy.logwarn("task_generator: %d tasks got no status within %.0f s: sent again", len(again),
+                                  self.ack_timeout)
                 if late:
                     self.dropped += len(late)
                     rospy.logwarn("task_generator: %d tasks got no status within %.0f s (%d so far), "
@@ -144,19 +159,19 @@ class TaskGenerator(object):
                                   sorted(late)[:10])
             # Credit does not pile up while the open-task limit holds generation back.
             self.credit = min(self.credit + self.per_event, max(1.0, self.per_event))
-            if not self.pickups or not self.deliveries:
-                return
             n = min(int(self.credit), self.max_open - len(self.open))
+            if not self.pickups or not self.deliveries:
+                n = 0
             if self.max_tasks > 0:
                 n = min(n, self.max_tasks - self.sent)
             for _ in range(max(0, n)):
                 t = self.make_task()
                 self.open.add(t.id)
-                self.unacked[t.id] = now
+                self.unacked[t.id] = (now, t)
                 self.sent += 1
                 batch.append(t)
             self.credit -= len(batch)
-        for t in batch:
+        for t in again + batch:
             self.pub.publish(t)
 
 

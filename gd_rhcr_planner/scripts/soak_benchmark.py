@@ -24,7 +24,8 @@ and plan time percentiles, overruns, skipped ticks, forced waits), the last plan
 fleet_sim /diagnostics values, and the planner node's resident memory (VmRSS of the pid the node
 reports through the ROS master/XML-RPC getPid; sampled every ~memory_period s; start = at the
 first step command, end, peak, the kernel's VmHWM, and a linear growth rate over the second
-half of the run, after the warm-up in which the open tasks pile up).
+half of the run, after the warm-up in which the open tasks pile up). A planner that dies and is
+respawned is followed: its successor's pid is found and sampled, and the restarts are counted.
 
 Stops after ~robot_steps robot-steps (default 100000) or ~duration s (default 0 = no limit) of
 wall time from the first step command, whichever comes first, or when no step command came for
@@ -35,7 +36,7 @@ or when no step command ever came.
 Parameters: ~planner_node (/gd_rhcr_planner), ~fleet_sim_node (/fleet_sim),
 ~task_generator_node (/task_generator) (their parameters go into the summary), ~robot_steps,
 ~duration, ~output, ~stall_timeout (60), ~startup_timeout (180), ~memory_period (1.0),
-~progress_period (30; 0 = quiet), ~settle (2.0 s to wait for late task_status messages after
+~progress_period (30; 0 = quiet), ~warm (300 s: when rss_warm_mb is sampled), ~settle (2.0 s to wait for late task_status messages after
 list_tasks), ~max_examples (20 FAILURE lines printed per kind).
 """
 import json
@@ -121,6 +122,7 @@ class Soak(object):
         self.progress_period = float(rospy.get_param("~progress_period", 30.0))
         self.settle = float(rospy.get_param("~settle", 2.0))
         self.max_examples = int(rospy.get_param("~max_examples", 20))
+        self.warm = float(rospy.get_param("~warm", 300.0))  # s after the first step: rss_warm_mb
         self.lock = threading.Lock()
         self.t_launch = time.time()
         self.t_first = None  # wall time of the first step command
@@ -179,6 +181,7 @@ class Soak(object):
 
         # Memory.
         self.pid = None
+        self.pids = []  # every planner pid seen, in order (a respawned planner adds one)
         self.mem_samples = []  # (wall time, rss kB)
         self.mem_start = None
         self.mem_error = ""
@@ -324,7 +327,7 @@ class Soak(object):
                 d = dict((kv.key, kv.value) for kv in s.values)
                 if s.hardware_id == "fleet_sim":
                     self.sim_diag = d
-                elif s.hardware_id == "gd_rhcr_fleet" or s.name.startswith(self.planner_node + ":"):
+                elif s.hardware_id.startswith("gd_rhcr_fleet") and s.name.endswith(": planner"):
                     self.planner_diag = d
                     if s.level >= 2:
                         self.planner_diag_errors += 1
@@ -343,18 +346,30 @@ class Soak(object):
             self.mem_error = "pid %d of %s (%s) is not readable here" % (pid, self.planner_node, host)
             return
         self.pid = pid
+        if not self.pids or self.pids[-1] != pid:
+            self.pids.append(pid)
         self.mem_error = ""
 
     def sample_memory_locked(self, now, start=False):
         if self.pid is None:
             return
         rss = read_status_kb(self.pid, "VmRSS")
-        if rss is None:
+        if rss is None:  # the planner died: look for its successor (respawn)
             self.mem_error = "planner pid %d vanished" % self.pid
+            self.pid = None
             return
         self.mem_samples.append((now, rss))
         if start:
             self.mem_start = rss
+
+    def rss_at(self, seconds):
+        """The first memory sample at least `seconds` after the first step command, in kB."""
+        if self.t_first is None:
+            return None
+        for t, kb in self.mem_samples:
+            if t - self.t_first >= seconds:
+                return kb
+        return None
 
     # --- run ----------------------------------------------------------------------------------
     def run(self):
@@ -606,6 +621,10 @@ class Soak(object):
                 "rss_peak_sampled_mb": mb(max(mem)) if mem else None,
                 "vm_hwm_mb": mb(hwm),
                 "rss_growth_mb_per_hour": round(slope, 2) if slope is not None else None,
+                "rss_warm_mb": mb(self.rss_at(self.warm)),
+                "warm_s": self.warm,
+                "planner_pids": list(self.pids),
+                "planner_restarts": max(0, len(self.pids) - 1),
                 "samples": len(mem),
                 "error": self.mem_error,
             },

@@ -4,7 +4,13 @@
     rosrun gd_rhcr_planner tick_benchmark.py _duration:=60
 e.g. against `roslaunch gd_rhcr_planner warehouse_sim.launch rviz:=false num_robots:=500`
 (the 500-robot, 2 Hz warehouse target: no overruns, tick callback well under 0.5 s).
+It needs a running planner: start one first, e.g. `bash scripts/run_warehouse.sh` (which builds
+everything) or, after `bash scripts/ros_build.sh && source .ws/devel/setup.bash`,
+`roslaunch gd_rhcr_planner warehouse_sim.launch rviz:=false`.
 """
+import sys
+
+import rosgraph
 import rospy
 
 from gd_rhcr_msgs.msg import PlannerStats
@@ -15,7 +21,14 @@ def pct(values, q):
     return v[min(len(v) - 1, int(round(q / 100.0 * (len(v) - 1))))] if v else float("nan")
 
 
+START_FIRST = ("start a planner first: bash scripts/run_warehouse.sh, or roslaunch gd_rhcr_planner "
+               "warehouse_sim.launch rviz:=false (after bash scripts/ros_build.sh && source .ws/devel/setup.bash)")
+
+
 def main():
+    if not rosgraph.is_master_online():
+        print("tick_benchmark: no ROS master at %s; %s" % (rosgraph.get_master_uri(), START_FIRST))
+        sys.exit(1)
     rospy.init_node("tick_benchmark", anonymous=True)
     duration = rospy.get_param("~duration", 30.0)
     stats = []
@@ -23,8 +36,8 @@ def main():
     rospy.loginfo("collecting planner_stats for %.0f s", duration)
     rospy.sleep(duration)
     if not stats:
-        print("no planner_stats received")
-        return
+        print("tick_benchmark: no planner_stats received in %.0f s; %s" % (duration, START_FIRST))
+        sys.exit(1)
     step = [s.step_time for s in stats]
     plan = [s.plan_time for s in stats]
     last = stats[-1]
