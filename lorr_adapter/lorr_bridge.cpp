@@ -1,6 +1,6 @@
 // The core side of the Start-Kit adapter: builds the grid, the distance table and the planner
-// once, then turns every Start-Kit step into a planner step in the rotation model: natively
-// where the planner plans in it, else its mapf steps with turns and waits (MapfInRotation).
+// once, then turns every Start-Kit step into a planner step in the rotation model: its mapf steps
+// with turns and waits (MapfInRotation) or its native rotation planning (GDRHCR_TURNS).
 #include "lorr_bridge.hpp"
 
 #include <algorithm>
@@ -87,9 +87,12 @@ BridgeOptions bridge_options_from_env() {
   o.params = parse_params(env_or("GDRHCR_PARAMS", ""));
   o.budget_ms = env_number("GDRHCR_BUDGET_MS", 0);
   o.seed = static_cast<uint64_t>(env_number("GDRHCR_SEED", 0));
-  o.turns = env_or("GDRHCR_TURNS", "auto");
-  if (o.turns != "auto" && o.turns != "native" && o.turns != "mapf-wait")
-    throw std::invalid_argument("GDRHCR_TURNS must be auto, native or mapf-wait, not '" + o.turns + "'");
+  try {
+    o.turns = env_or("GDRHCR_TURNS", "");
+    if (!o.turns.empty()) parse_turn_planning(o.turns);  // a bad value is named now
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("GDRHCR_TURNS: ") + e.what());
+  }
   return o;
 }
 
@@ -104,14 +107,10 @@ struct Bridge::Impl {
     if (budget_s > 0 && o.planner == "rhcr" && !params.has("timeout")) params.set("timeout", std::to_string(budget_s));
     const PlannerParams values = PlannerParams::resolve(o.planner, params, MapFacts(grid, n));
     params.check_all_used("GDRHCR_PARAMS for planner " + o.planner);
-    if (o.turns == "mapf-wait")
-      planner = std::make_unique<MapfInRotation>(make_planner(values, grid, n, o.seed), grid);
-    else
-      planner = make_planner_in(values, grid, n, o.seed, ActionModel::kRotation, how);
-    if (o.turns == "native" && how != "native")
-      throw std::invalid_argument("GDRHCR_TURNS=native: planner " + o.planner + " does not plan in the rotation model");
+    const TurnPlanning turns = o.turns.empty() ? kLorrTurnPlanning : parse_turn_planning(o.turns);
+    planner = make_planner_in(values, grid, n, o.seed, ActionModel::kRotation, turns);
     std::fprintf(stderr, "gdrhcr lorr adapter: planner %s, turns %s, budget %g ms\n", o.planner.c_str(),
-                 o.turns == "mapf-wait" ? "mapf-wait" : how.c_str(), o.budget_ms);
+                 turn_planning_name(turns), o.budget_ms);
     pos.resize(n);
     headings.resize(n);
     next_headings.resize(n);
@@ -124,7 +123,6 @@ struct Bridge::Impl {
   DistTable dist;
   int num_agents;
   std::unique_ptr<Planner> planner;
-  std::string how;
   std::vector<Cell> pos, next;
   std::vector<Heading> headings, next_headings;
   std::vector<std::vector<Cell>> goals;

@@ -17,15 +17,15 @@ namespace gdrhcr_lorr {
 //   GDRHCR_BUDGET_MS  our planner's time per step in ms (0 = none): GD-RHCR's step-budget and
 //                     RHCR's PBS timeout unless GDRHCR_PARAMS sets them
 //   GDRHCR_SEED       seed for the planner's tie-breaks (default 0)
-//   GDRHCR_TURNS      auto (default: the planner's native rotation planning where it has it,
-//                     else its mapf steps with turns and waits, gdrhcr::MapfInRotation),
-//                     native, or mapf-wait
+//   GDRHCR_TURNS      mapf-wait (the planner's mapf steps with turns and waits,
+//                     gdrhcr::MapfInRotation) or native (its own rotation planning); default
+//                     gdrhcr::kLorrTurnPlanning
 struct BridgeOptions {
   std::string planner = "gd-rhcr";
   std::vector<std::pair<std::string, std::string>> params;
   double budget_ms = 0;
   uint64_t seed = 0;
-  std::string turns = "auto";
+  std::string turns;  // "native" or "mapf-wait"; empty = gdrhcr::kLorrTurnPlanning
 };
 // Throws std::invalid_argument naming the variable for a malformed value.
 BridgeOptions bridge_options_from_env();

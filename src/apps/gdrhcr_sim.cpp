@@ -27,8 +27,10 @@ const char* kUsage =
     "  --lorr-problem FILE a LoRR Start-Kit problem JSON: its map, agents (teamSize starts) and\n"
     "                      task list (taskAssignmentStrategy; numTasksReveal is the default\n"
     "                      --lookahead); replaces --map, --agents, --tasks; runs in the\n"
-    "                      rotation model unless --action-model mapf (a planner without rotation\n"
-    "                      planning then waits for its turns: stats.rotation_by mapf-wait)\n"
+    "                      rotation model unless --action-model mapf, with --turns mapf-wait\n"
+    "  --turns HOW         in rotation: native (the planner plans with headings; default) or\n"
+    "                      mapf-wait (its mapf steps executed with turns and waits; the default\n"
+    "                      with --lorr-problem)\n"
     "  --lorr-out FILE     also write the run as the Start-Kit's output JSON, in the run's action\n"
     "                      model (rotation: MAPF_T, F/R/C/W; mapf: PlanViz's MAPF letters)\n"
     "  --tasks random|mapd task stream (default random)\n"
@@ -126,6 +128,7 @@ struct RunOptions {
   uint64_t seed = 0;
   bool distinct_goals = false;
   ActionModel action_model = ActionModel::kMapf;
+  TurnPlanning turns = TurnPlanning::kNative;
   std::unique_ptr<LorrProblem> lorr;
 };
 
@@ -153,6 +156,11 @@ RunOptions read_options(Params& args) {
   o.deliveries_file = args.get_string("deliveries", "");
   o.planner = args.get_string("planner", "pibt");
   o.action_model = read_action_model(args, o.lorr ? "rotation" : "mapf");  // LoRR's own model: MAPF_T
+  try {
+    o.turns = parse_turn_planning(args.get_string("turns", turn_planning_name(o.lorr ? kLorrTurnPlanning : o.turns)));
+  } catch (const std::invalid_argument& e) {
+    throw ParamError(std::string("--turns: ") + e.what());
+  }
   o.agents = o.lorr ? o.lorr->team_size : args.get_int("agents", 100, 1, 10000000);
   o.steps = args.get_int("steps", 500, 1, 100000000);
   o.seed = args.get_u64("seed", 0);
@@ -211,6 +219,7 @@ nlohmann::json result_json(const RunOptions& o, const SimResult& r, const Planne
   params["tasks"] = o.task_kind;
   params["lookahead"] = o.lookahead;
   params["action_model"] = action_model_name(o.action_model);
+  if (o.action_model == ActionModel::kRotation) params["turns"] = turn_planning_name(o.turns);
   params["dist_budget_mb"] = o.budget_mb;
   j["params"] = params;
   for (auto& v : values.values()) j["param_sources"][v.spec->name] = v.source;
@@ -248,9 +257,7 @@ int run(Params& args, const Flags& flags) {
   TaskListStream* task_list = nullptr;
   std::unique_ptr<TaskStream> tasks = make_tasks(o, grid, task_info, task_list);
   const std::vector<Cell> starts = o.lorr ? o.lorr->starts : random_starts(grid, o.agents, o.seed);
-  std::string turns = "native";  // LoRR: a planner without rotation planning waits for its turns
-  auto planner = o.lorr ? make_planner_in(values, grid, o.agents, o.seed, o.action_model, turns)
-                        : make_planner(values, grid, o.agents, o.seed, o.action_model);
+  auto planner = make_planner_in(values, grid, o.agents, o.seed, o.action_model, o.turns);
 
   SimOptions opt;
   opt.steps = o.steps;

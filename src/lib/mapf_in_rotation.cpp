@@ -73,13 +73,18 @@ nlohmann::json MapfInRotation::stats() const {
   return j;
 }
 
+TurnPlanning parse_turn_planning(const std::string& text) {
+  if (text == "native") return TurnPlanning::kNative;
+  if (text == "mapf-wait") return TurnPlanning::kMapfWait;
+  throw std::invalid_argument("unknown turn planning '" + text + "' (expected native or mapf-wait)");
+}
+
+const char* turn_planning_name(TurnPlanning how) { return how == TurnPlanning::kNative ? "native" : "mapf-wait"; }
+
 std::unique_ptr<Planner> make_planner_in(const PlannerParams& values, const Grid& grid, int num_agents, uint64_t seed,
-                                         ActionModel model, std::string& how) {
-  if (model == ActionModel::kMapf || planner_supports(values.planner(), model)) {
-    how = "native";
+                                         ActionModel model, TurnPlanning how) {
+  if (model == ActionModel::kMapf || how == TurnPlanning::kNative)
     return make_planner(values, grid, num_agents, seed, model);
-  }
-  how = "mapf-wait";
   return std::make_unique<MapfInRotation>(make_planner(values, grid, num_agents, seed, ActionModel::kMapf), grid);
 }
 

@@ -137,6 +137,7 @@ r = json.load(open(sys.argv[1]))
 rotation = sys.argv[4] == "default"
 assert r["agents"] == 3 and r["tasks"]["kind"] == "lorr" and r["params"]["lookahead"] == 1, r
 assert r["action_model"] == ("rotation" if rotation else "mapf"), r["action_model"]
+assert r["params"].get("turns") == ("mapf-wait" if rotation else None), r["params"]
 o = json.load(open(sys.argv[3]))
 assert o["actionModel"] == ("MAPF_T" if rotation else "MAPF") and o["teamSize"] == 3 and o["makespan"] == 40, o
 assert o["numTaskFinished"] == r["goals_reached"] > 0, (o["numTaskFinished"], r["goals_reached"])
@@ -169,6 +170,7 @@ printf '3\n0\n7\n23\n' >"$tmp/lorr/wall.agents"
 printf '{"mapFile": "maps/small.map", "agentFile": "wall.agents", "teamSize": 3, "taskFile": "tasks.txt"}\n' >"$tmp/lorr/wall.json"
 expect_error "LoRR agent on a wall names the line" "wall.agents:3: cell id 7 \\(1,1\\) is an obstacle" --lorr-problem "$tmp/lorr/wall.json"
 expect_error "LoRR problem with --map" "--map cannot be combined with --lorr-problem" --lorr-problem "$tmp/lorr/problem.json" --map "$m"
+expect_error "a bad --turns named" "--turns: unknown turn planning 'sideways' \\(expected native or mapf-wait\\)" --lorr-problem "$tmp/lorr/problem.json" --turns sideways
 
 # The parameter table: --list-params prints every parameter of the planner with the value in force
 # for the map and fleet (rules applied, given values marked), and runs nothing.

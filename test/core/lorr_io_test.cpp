@@ -239,8 +239,8 @@ TEST(LorrIo, OutputReplaysOurOwnPathsExactly) {
 }
 
 namespace {
-// One LoRR run on `dir`'s problem with PIBT, in `model` (a mapf planner waiting for its turns in
-// rotation); the recorded goals come back in `goals`.
+// One LoRR run of problem `p` with a planner (PIBT by default), in `model` (in rotation as LoRR
+// runs move, kLorrTurnPlanning); the recorded goals come back in `goals`.
 SimResult run_lorr(const LorrProblem& p, int steps, ActionModel model, std::vector<std::vector<Cell>>* goals = nullptr,
                    const std::string& planner_name = "pibt") {
   TaskListStream list(p.grid, p.tasks, p.team_size, p.strategy);
@@ -248,8 +248,7 @@ SimResult run_lorr(const LorrProblem& p, int steps, ActionModel model, std::vect
   DistTable dist(p.grid, model);
   Params params;
   const PlannerParams values = PlannerParams::resolve(planner_name, params, MapFacts(p.grid, p.team_size));
-  std::string how;
-  auto planner = make_planner_in(values, p.grid, p.team_size, 1, model, how);
+  auto planner = make_planner_in(values, p.grid, p.team_size, 1, model, kLorrTurnPlanning);
   SimOptions opt;
   opt.steps = steps;
   opt.lookahead = p.num_tasks_reveal;
