@@ -79,7 +79,7 @@ void Executor::reconcile(const std::vector<RobotRecord>& robots, TickOutput& out
     tracks_[r].reported_moving = rec.moving;
     if (!tracks_[r].active) need_resync |= place(r, rec, out);  // its first report, or it could not be placed before
     else if (rec.silent) need_resync |= fall_silent(r, out);
-    else need_resync |= take_report(r, rec, out);
+    else need_resync |= take_report(r, robots, out);
   }
   if (need_resync) {
     resync();
@@ -129,8 +129,9 @@ bool Executor::fall_silent(int r, TickOutput& out) {
 
 // A placed robot's report: at rest or moving in its cell, arrived in its dispatched cell, or in a
 // cell it was not commanded into; then its health. True when the commitments need a resync.
-bool Executor::take_report(int r, const RobotRecord& rec, TickOutput& out) {
+bool Executor::take_report(int r, const std::vector<RobotRecord>& robots, TickOutput& out) {
   Track& t = tracks_[r];
+  const RobotRecord& rec = robots[r];
   const Cell x = rec.cell;
   bool need_resync = false;
   RobotHealth h = rec.reported_offline ? RobotHealth::kOffline : RobotHealth::kOk;
@@ -143,7 +144,7 @@ bool Executor::take_report(int r, const RobotRecord& rec, TickOutput& out) {
     }
   } else if (t.dispatched && x == t.path.front()) {
     arrive(r);
-  } else if (take_unexpected_cell(r, x, out)) {
+  } else if (take_unexpected_cell(r, x, robots, out)) {
     need_resync = true;
   } else {
     h = RobotHealth::kInconsistent;
@@ -158,16 +159,22 @@ bool Executor::take_report(int r, const RobotRecord& rec, TickOutput& out) {
 }
 
 // Robot r reports cell x, which it was not commanded into. A slip (it ended in a free neighbour of
-// the cell it was in) is taken as the truth (true: replanned from there); a cell another robot
-// holds, or a jump, is not (false): the robot is an obstacle at both cells.
-bool Executor::take_unexpected_cell(int r, Cell x, TickOutput& out) {
+// the cell it was in or was sent to) is taken as the truth (true: replanned from there), also when another robot
+// was only commanded into x and still reports at rest where it was: that robot's move is taken
+// back (told to stay). A cell another robot is in or entering, or a jump, is not believed (false):
+// the robot is an obstacle at both cells until it reports a cell that fits (it may then be x,
+// once x is free).
+bool Executor::take_unexpected_cell(int r, Cell x, const std::vector<RobotRecord>& robots, TickOutput& out) {
   Track& t = tracks_[r];
-  const int other = holder_of(x, r);
-  const bool reachable = grid_.step_allowed(t.cell, x);  // one move from where it was
-  // A robot that already claimed this very cell while another robot held it is not believed
-  // now that the cell is free: the same report stays inconsistent.
-  const bool same_claim = t.health == RobotHealth::kInconsistent && t.claimed == x;
-  if (other < 0 && reachable && !same_claim) {
+  int other = holder_of(x, r);
+  // One move from where it was, or from the cell it was sent to (it arrived, unreported, and slipped).
+  const bool reachable = grid_.step_allowed(t.cell, x) || (t.dispatched && grid_.step_allowed(t.path.front(), x));
+  if (other >= 0 && reachable && withdraw_move(other, x, r, robots)) {
+    out.warnings.push_back(who(other) + "'s move into " + grid_.describe(x) + " is taken back: " + who(r) +
+                           " slipped into it");
+    other = -1;
+  }
+  if (other < 0 && reachable) {
     out.warnings.push_back(who(r) + " reports " + grid_.describe(x) + ", not the cell it was commanded (" +
                            grid_.describe(t.dispatched ? t.path.front() : t.cell) + "): replanned from there");
     t.cell = x;
@@ -183,6 +190,24 @@ bool Executor::take_unexpected_cell(int r, Cell x, TickOutput& out) {
                            ": an obstacle at " + grid_.describe(t.cell) + " and " + grid_.describe(x));
   t.claimed = x;
   return false;
+}
+
+// Robot q was commanded into x but reports at rest in its own cell, which it has not left, and no
+// robot but q holds x (r, who reports x, aside): q's move is taken back (true; the caller resyncs
+// the commitments).
+bool Executor::withdraw_move(int q, Cell x, int r, const std::vector<RobotRecord>& robots) {
+  Track& t = tracks_[q];
+  const RobotRecord& rec = robots[q];
+  if (!t.active || t.health != RobotHealth::kOk || !t.dispatched || t.path.front() != x || t.cell == x ||
+      t.claimed == x || !rec.reported || rec.silent || rec.moving || rec.cell != t.cell)
+    return false;
+  t.dispatched = false;  // does anybody else hold x?
+  if (holder_of(x, r) >= 0) {
+    t.dispatched = true;
+    return false;
+  }
+  t.path.clear();
+  return true;
 }
 
 // Robot r's health becomes h (warned when it changes). True when it changed.
@@ -213,9 +238,29 @@ void Executor::arrive(int r) {
   t.claimed = kNoCell;
 }
 
+// Cells robots report being in, or may be entering, that the executor has not accounted for yet (a
+// slip, a robot not placed, a move without a command): nobody is sent into them between ticks; the
+// next tick reconciles the reports.
+std::vector<Cell> Executor::unaccounted_cells(const std::vector<RobotRecord>& robots) const {
+  std::vector<Cell> cells;
+  for (int r = 0; r < num_robots(); ++r) {
+    const Track& t = tracks_[r];
+    const RobotRecord& rec = robots[r];
+    if (!rec.reported || rec.silent || rec.cell == kNoCell) continue;
+    const bool known = t.active && (rec.cell == t.cell || (t.dispatched && rec.cell == t.path.front()));
+    if (!known) cells.push_back(rec.cell);
+    if (rec.moving && !(t.active && t.dispatched)) {
+      for (Cell nb : grid_.neighbours(rec.cell)) cells.push_back(nb);
+    }
+  }
+  std::sort(cells.begin(), cells.end());
+  return cells;
+}
+
 std::vector<int> Executor::advance(const std::vector<RobotRecord>& robots, const std::vector<uint8_t>* hold) {
   std::vector<int> changed;
   if (static_cast<int>(robots.size()) != num_robots()) return changed;
+  const std::vector<Cell> avoid = unaccounted_cells(robots);
   bool arrived = false;
   for (int r = 0; r < num_robots(); ++r) {
     Track& t = tracks_[r];
@@ -231,13 +276,26 @@ std::vector<int> Executor::advance(const std::vector<RobotRecord>& robots, const
   TickOutput unused;
   // A move dispatched between ticks counts as dispatched in the coming tick: it is late only if
   // it is not made by the tick after.
-  dispatch_ready(unused, ticks_ + 1, hold_flags(hold), &changed);
+  dispatch_ready(unused, ticks_ + 1, hold_flags(hold), &changed, &avoid);
   return changed;
 }
 
 Cell Executor::command(int r) const {
   const Track& t = tracks_[r];
+  if (t.health == RobotHealth::kInconsistent) {
+    // Told to stay where it reports; a robot moving where we cannot tell gets no command (it stops
+    // at the end of its move, and its next report is judged), unless it is making its own move.
+    if (t.reported_moving) return t.dispatched && t.claimed == kNoCell ? t.path.front() : kNoCell;
+    return t.claimed != kNoCell ? t.claimed : t.cell;
+  }
   return t.dispatched ? t.path.front() : t.cell;
+}
+
+std::vector<Cell> Executor::accepted_cells() const {
+  std::vector<Cell> cells(tracks_.size(), kNoCell);
+  for (size_t r = 0; r < tracks_.size(); ++r)
+    if (tracks_[r].active) cells[r] = tracks_[r].cell;
+  return cells;
 }
 
 // Drops robot r's commitments that were not dispatched yet, and, transitively, those of every
@@ -305,11 +363,12 @@ void Executor::resync() {
 }
 
 int Executor::dispatch_ready(TickOutput& out, uint64_t stamp, const std::vector<uint8_t>& hold,
-                             std::vector<int>* sent) {
+                             std::vector<int>* sent, const std::vector<Cell>* avoid) {
   int n = 0;
   for (int r = 0; r < num_robots(); ++r) {
     Track& t = tracks_[r];
     if (!t.active || t.health != RobotHealth::kOk || t.dispatched || t.path.empty() || on_hold(hold, r)) continue;
+    if (avoid && std::binary_search(avoid->begin(), avoid->end(), t.path.front())) continue;
     auto it = visits_.find(t.path.front());
     if (it != visits_.end() && !it->second.empty() && it->second.front() == r) {
       t.dispatched = true;
@@ -516,10 +575,13 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
   for (int r = 0; r < n; ++r) {
     const Track& t = tracks_[r];
     out.health[r] = t.health;
-    if (!t.active) continue;
+    if (!t.active) {
+      if (t.claimed != kNoCell) out.command[r] = command(r);  // not placed: told to stay where it reports
+      continue;
+    }
     out.cells[r] = t.cell;
     // On hold and at rest: told to stay; its commanded cell stays reserved for when it is released.
-    out.command[r] = t.dispatched && !(on_hold(held, r) && !t.reported_moving) ? t.path.front() : t.cell;
+    out.command[r] = on_hold(held, r) && !t.reported_moving && t.health != RobotHealth::kInconsistent ? t.cell : command(r);
     out.end_state[r] = t.path.empty() ? t.cell : t.path.back();
     if (t.health == RobotHealth::kOk && !t.dispatched && !t.path.empty() && !on_hold(held, r)) ++out.waiting;
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <utility>
 
 namespace gd_rhcr_planner {
 
@@ -168,6 +169,15 @@ void Fleet::forget_old_finished() {
   finished_order_.erase(finished_order_.begin(), finished_order_.begin() + drop);
 }
 
+void Fleet::set_accepted_cells(std::vector<Cell> cells) {
+  accepted_ = std::move(cells);
+  accepted_.resize(robots_.size(), gdrhcr::kNoCell);
+}
+
+bool Fleet::at_cell(int r, Cell c) const {
+  return robots_[r].cell == c && (accepted_.empty() || accepted_[r] == c);
+}
+
 void Fleet::advance() {
   // Cells where offline robots stand: a pickup there cannot be reached until they leave.
   std::map<Cell, int> offline_at;
@@ -202,8 +212,8 @@ void Fleet::advance() {
                     std::to_string(blocker(t.pickup)) + "; waiting in the queue");
       continue;
     }
-    if (t.state == kAssigned && rob.cell == t.pickup) set_state(t, kPicked, r, "");
-    if (t.state == kPicked && rob.cell == t.delivery) {
+    if (t.state == kAssigned && at_cell(r, t.pickup)) set_state(t, kPicked, r, "");
+    if (t.state == kPicked && at_cell(r, t.delivery)) {
       set_state(t, kDelivered, r, "");
       rob.task = -1;
     }
@@ -233,7 +243,7 @@ void Fleet::advance() {
     idle.erase(idle.begin() + best);
     robots_[r].task = static_cast<int64_t>(t->id);
     set_state(*t, kAssigned, r, "");
-    if (robots_[r].cell == t->pickup) set_state(*t, kPicked, r, "");
+    if (at_cell(r, t->pickup)) set_state(*t, kPicked, r, "");
   }
 }
 
@@ -275,7 +285,7 @@ std::vector<std::string> Fleet::apply_assignments(const std::vector<Reassignment
     }
     robots_[r].task = static_cast<int64_t>(t.id);
     set_state(t, kAssigned, r, before >= 0 ? "reassigned from robot " + std::to_string(before) : "");
-    if (robots_[r].cell == t.pickup) set_state(t, kPicked, r, "");
+    if (at_cell(r, t.pickup)) set_state(t, kPicked, r, "");
   }
   return refused;
 }

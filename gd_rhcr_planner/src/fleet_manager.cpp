@@ -378,6 +378,7 @@ FleetManager::Gathered FleetManager::gather_locked(double now, std::unique_ptr<D
   }
   // Tasks move on only once the fleet does: robots without a cell must not be assigned anything.
   if (missing == 0 || in.proceed_without_missing) {
+    fleet_->set_accepted_cells(executor_->accepted_cells());  // no pickup or delivery from a rejected report
     fleet_->advance();
     dispatch_stats_ = dispatcher_->dispatch(*fleet_, *dist_, operator_.unavailable());
   }

@@ -10,6 +10,7 @@
 #include <functional>
 #include <memory>
 #include <random>
+#include <algorithm>
 
 #include "delayed_fleet.hpp"
 #include "gd_rhcr_planner/execution.hpp"
@@ -158,6 +159,7 @@ namespace {
 
 struct SimResult {
   int goals = 0, goals_tail = 0, ticks = 0;
+  std::vector<RobotHealth> final_health;  // per robot, at the last tick
   std::vector<int> moves_tail;  // moves per robot after the delays stopped
   int max_wait_tail = 0;        // longest stretch a healthy robot waited on a committed move, tail
   std::vector<std::vector<int>> health_ticks;  // per robot, ticks spent in each RobotHealth
@@ -177,23 +179,28 @@ const Grid& small_warehouse() {
 // Runs `ticks` ticks with delays, then `tail` ticks without.
 SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int ticks, int tail, double p_delay,
                     int max_delay, const std::function<void(int, DelayedFleet&)>& faults = nullptr,
-                    int commit_horizon = 1, bool between = false) {
+                    int commit_horizon = 1, bool between = false, const std::vector<int>& restarts = {}) {
   const Grid& g = small_warehouse();
   gdrhcr::DistTable dist(g);
   gdrhcr::Params params, none;
   if (planner_name == "gd-rhcr") params.set("timeout", "1"), params.set("node-budget", "2000");
-  DeadlinePlanner planner(gdrhcr::make_planner(planner_name, params, g, n, seed),
-                          gdrhcr::make_planner("pibt", none, g, n, seed));
   ExecutorConfig cfg;
   cfg.commit_horizon = commit_horizon;
-  Executor ex(g, dist, n, cfg);
+  std::unique_ptr<DeadlinePlanner> planner_ptr;
+  std::unique_ptr<Executor> ex_ptr;
+  // A fresh planner and executor (a restarted planner process) know nothing of the moves made.
+  auto start = [&] {
+    planner_ptr = std::make_unique<DeadlinePlanner>(gdrhcr::make_planner(planner_name, params, g, n, seed),
+                                                    gdrhcr::make_planner("pibt", none, g, n, seed));
+    ex_ptr = std::make_unique<Executor>(g, dist, n, cfg);
+  };
+  start();
   DelayedFleet sim(g, n, seed);
   // Dispatch on arrival: the executor sees the robots' reports after every substep, and the ADG
   // invariants hold after each of those dispatches too.
-  const DelayedFleet::Between dispatch = DelayedFleet::on_arrival(ex);
   DelayedFleet::Between on_arrival = [&](const std::vector<RobotRecord>& reports) {
-    auto cmds = dispatch(reports);
-    EXPECT_EQ(ex.check_invariants(), "");
+    auto cmds = DelayedFleet::on_arrival(*ex_ptr)(reports);
+    EXPECT_EQ(ex_ptr->check_invariants(), "");
     return cmds;
   };
   SimResult res;
@@ -202,6 +209,9 @@ SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int t
   std::vector<int> wait_run(n, 0);
   for (int t = 0; t < ticks + tail; ++t) {
     if (faults) faults(t, sim);
+    if (std::find(restarts.begin(), restarts.end(), t) != restarts.end()) start();
+    Executor& ex = *ex_ptr;
+    DeadlinePlanner& planner = *planner_ptr;
     if (t == ticks) std::fill(wait_run.begin(), wait_run.end(), 0);  // the tail counts waits that start in it
     int reached = 0;
     auto goals = sim.goals(reached);
@@ -238,6 +248,7 @@ SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int t
       if (t >= ticks) res.max_wait_tail = std::max(res.max_wait_tail, wait_run[i]);
     }
     ++res.ticks;
+    res.final_health = out.health;
     if (std::getenv("EXEC_DEBUG") && t + 1 == ticks + tail)
       for (int i = 0; i < n; ++i)
         fprintf(stderr, "seed %lu end robot %d at %s %s goal %s moves_tail %d committed %zu\n", (unsigned long)seed, i,
@@ -471,4 +482,189 @@ TEST(ExecutorAdg, ARobotOnHoldGetsNoNewMove) {
   hold[0] = 0;
   out = ex.tick(robots, {{g.cell(5, 0)}}, *planner, false, &hold);
   EXPECT_EQ(out.command[0], g.cell(2, 0));
+}
+
+// Issue 25: robot 0 is commanded into (2,0) but is delayed and still at rest in (1,0); robot 1
+// slips into (2,0). The slip is believed and robot 0's move is taken back (told to stay), so it
+// does not drive into robot 1. (Before, robot 1 was marked inconsistent for as long as it stayed
+// there, and robot 0 kept its command into the cell robot 1 stands in.) Then both go on.
+TEST(ExecutorAdg, ASlipIntoACellCommandedToARobotAtRestTakesThatMoveBack) {
+  const Grid g = Grid::from_rows({"......"});
+  gdrhcr::DistTable dist(g);
+  FnPlanner* fn;
+  auto planner = make_fn_planner(g, 2, &fn);
+  Executor ex(g, dist, 2, ExecutorConfig{});
+  std::vector<RobotRecord> robots{at(g, 1, 0), at(g, 3, 0)};
+  fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
+    if (w.positions[0] == g.cell(1, 0)) next[0] = g.cell(2, 0);
+    if (w.positions[1] == g.cell(2, 0)) next[1] = g.cell(3, 0);
+  };
+  auto out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.command[0], g.cell(2, 0));
+  robots[1] = at(g, 2, 0);  // slipped; robot 0 is delayed, at rest in (1,0)
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.health[1], RobotHealth::kOk) << "the slip into a cell nobody is in or entering is believed";
+  EXPECT_EQ(ex.cell(1), g.cell(2, 0));
+  EXPECT_NE(out.command[0], g.cell(2, 0)) << "robot 0 is still sent into the cell robot 1 slipped into";
+  EXPECT_EQ(out.command[0], g.cell(1, 0));
+  EXPECT_EQ(out.command[1], g.cell(3, 0)) << "robot 1 goes on from where it is";
+  EXPECT_EQ(ex.check_invariants(), "");
+  robots[1] = at(g, 3, 0);  // arrived: robot 0 may now enter (2,0)
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.command[0], g.cell(2, 0));
+  EXPECT_EQ(ex.check_invariants(), "");
+}
+
+// Issue 25: robot 1 reports the cell robot 0 stands in: not believed (an obstacle at both cells).
+// It is told to stay where it reports, not sent on. Once robot 0 has left, robot 1's report of that
+// cell, next to its own, is believed and it is planned again. (Before, the same report stayed
+// inconsistent for ever: the robot was never planned again.)
+TEST(ExecutorAdg, ARobotReportingAnOccupiedNeighbourIsBelievedOnceTheCellIsFree) {
+  const Grid g = Grid::from_rows({"......"});
+  gdrhcr::DistTable dist(g);
+  FnPlanner* fn;
+  auto planner = make_fn_planner(g, 2, &fn);
+  Executor ex(g, dist, 2, ExecutorConfig{});
+  std::vector<RobotRecord> robots{at(g, 2, 0), at(g, 3, 0)};
+  bool leave = false;
+  fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
+    if (leave && w.positions[0] == g.cell(2, 0)) next[0] = g.cell(1, 0);
+  };
+  auto out = ex.tick(robots, stay_goals(robots), *planner, false);
+  robots[1] = at(g, 2, 0);  // robot 0 is there
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.health[1], RobotHealth::kInconsistent);
+  EXPECT_EQ(out.command[1], g.cell(2, 0)) << "told to stay where it reports";
+  leave = true;
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.command[0], g.cell(1, 0));
+  robots[0] = at(g, 1, 0);  // robot 0 has left (2,0)
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.health[1], RobotHealth::kOk) << "robot 1 stays inconsistent although its report now fits";
+  EXPECT_EQ(ex.cell(1), g.cell(2, 0));
+  EXPECT_EQ(ex.check_invariants(), "");
+}
+
+// Issue 25: robot 1, commanded from (3,0) into (4,0), reports (1,0), where robot 0 stands, three
+// cells from the cell it was sent to: it is told to stay where it reports (not sent on to (4,0),
+// which is not next to it); reporting so while moving, it gets no command at all.
+TEST(ExecutorAdg, AnInconsistentRobotIsToldToStayWhereItReports) {
+  const Grid g = Grid::from_rows({"......"});
+  gdrhcr::DistTable dist(g);
+  FnPlanner* fn;
+  auto planner = make_fn_planner(g, 2, &fn);
+  Executor ex(g, dist, 2, ExecutorConfig{});
+  std::vector<RobotRecord> robots{at(g, 1, 0), at(g, 3, 0)};
+  fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
+    if (w.positions[1] == g.cell(3, 0)) next[1] = g.cell(4, 0);
+  };
+  auto out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.command[1], g.cell(4, 0));
+  robots[1] = at(g, 1, 0);
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.health[1], RobotHealth::kInconsistent);
+  EXPECT_EQ(out.command[1], g.cell(1, 0)) << "sent to " << g.describe(out.command[1]);
+  robots[1].moving = true;
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.command[1], kNoCell) << "sent to " << g.describe(out.command[1]);
+  EXPECT_EQ(ex.check_invariants(), "");
+}
+
+// Issue 25: between ticks, robot 0 leaves (2,0) and robot 1, queued behind it, would be sent in;
+// but robot 2 reports it has slipped into (2,0). Nobody is sent into a cell a robot reports being
+// in: robot 1 waits, and the next tick takes robot 2's slip and plans robot 1 again. (Before,
+// reports that were not arrivals were ignored between ticks and robot 1 was sent into robot 2.)
+TEST(ExecutorAdg, NoDispatchBetweenTicksIntoACellARobotReportsBeingIn) {
+  const Grid g = Grid::from_rows({"......", "......"});
+  gdrhcr::DistTable dist(g);
+  FnPlanner* fn;
+  auto planner = make_fn_planner(g, 3, &fn);
+  Executor ex(g, dist, 3, ExecutorConfig{});
+  std::vector<RobotRecord> robots{at(g, 2, 0), at(g, 1, 0), at(g, 2, 1)};
+  int step = 0;
+  fn->fn = [&](const gdrhcr::WorldView&, std::vector<Cell>& next) {
+    if (step++ == 0) next[0] = g.cell(3, 0), next[1] = g.cell(2, 0);
+  };
+  auto out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.command[0], g.cell(3, 0));
+  EXPECT_EQ(out.waiting, 1);
+  robots[0] = at(g, 3, 0);  // arrived
+  robots[2] = at(g, 2, 0);  // slipped into the cell robot 0 left
+  EXPECT_TRUE(ex.advance(robots).empty());
+  EXPECT_EQ(ex.command(1), g.cell(1, 0));
+  EXPECT_EQ(ex.cell(0), g.cell(3, 0)) << "the arrival is taken";
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.health[2], RobotHealth::kOk);
+  EXPECT_EQ(ex.cell(2), g.cell(2, 0));
+  EXPECT_EQ(out.command[1], g.cell(1, 0));
+  EXPECT_TRUE(ex.committed(1).empty()) << "robot 1's move into (2,0) is planned again";
+  EXPECT_EQ(ex.check_invariants(), "");
+}
+
+namespace {
+
+// Robot i, at rest and not delayed, slips into a neighbour no robot is in or entering: one another
+// robot was commanded into and has not started for when there is one (it is delayed), else any.
+// Returns true when it slipped.
+bool slip(DelayedFleet& sim, size_t i) {
+  auto& r = sim.robots();
+  SimRobot& s = r[i];
+  if (s.missing || s.silent || s.offline || s.moving || s.delay > 0) return false;
+  Cell best = kNoCell;
+  for (Cell nb : small_warehouse().neighbours(s.cell)) {
+    bool taken = false, commanded = false;
+    for (const SimRobot& o : r) {
+      if (o.missing) continue;
+      taken |= o.cell == nb || (o.moving && o.dst == nb);
+      commanded |= !o.moving && o.cmd == nb;
+    }
+    if (taken) continue;
+    if (best == kNoCell || commanded) best = nb;
+    if (commanded) break;
+  }
+  if (best == kNoCell) return false;
+  s.cell = best;
+  s.cmd = kNoCell;  // its controller drops the move it was given
+  return true;
+}
+
+}  // namespace
+
+// Issue 25: slips, faults and planner restarts together, with two moves committed ahead and moves
+// dispatched between ticks (the node's defaults), under random delays. Every few ticks a robot
+// slips into a free neighbour, preferably one another robot was commanded into and has not started
+// for (it is delayed); robot 1 falls silent mid-run and comes back, robot 2 goes offline and comes
+// back (offline across a restart); twice the planner process restarts (a fresh executor and planner, robots mid-move). No two
+// robots ever share a cell, no command is bad, and after 60 ticks without delays or faults every
+// robot is healthy again, moving, and the fleet reaches goals.
+TEST(ExecutorAdg, SlipsFaultsAndRestartsWithTwoMovesAheadAndDispatchOnArrival) {
+  for (uint64_t seed = 1; seed <= seeds(8); ++seed) {
+    int slips = 0;
+    auto faults = [&](int t, DelayedFleet& sim) {
+      auto& r = sim.robots();
+      if (t == 20) r[1].silent = true;  // back before the restart: a restarted node never hears of a silent robot
+      if (t == 50) r[1].silent = false;
+      if (t == 35) r[2].offline = true;
+      if (t == 85) r[2].offline = false;
+      if (t < 150 && t % 4 == 0)
+        for (size_t k = 0; k < r.size(); ++k)
+          if (slip(sim, (t / 4 + k * 7) % r.size())) {
+            ++slips;
+            break;
+          }
+    };
+    for (const char* planner : {"pibt", "gd-rhcr"}) {
+      if (std::string(planner) == "gd-rhcr" && seed > 3) continue;
+      slips = 0;
+      const SimResult res = run_fleet(planner, 30, seed, 150, 60, 0.05, 20, faults, 2, true, {60, 120});
+      if (HasFailure()) return;
+      EXPECT_GT(slips, 20) << planner << " seed " << seed;
+      EXPECT_GT(res.goals_tail, 0) << planner << " seed " << seed;
+      EXPECT_LE(res.max_wait_tail, 30) << planner << " seed " << seed;
+      for (int i = 0; i < 30; ++i)
+        EXPECT_EQ(res.final_health[i], RobotHealth::kOk) << planner << " seed " << seed << " robot " << i;
+      EXPECT_GT(res.health_ticks[1][int(RobotHealth::kSilent)], 0);
+      EXPECT_GT(res.health_ticks[2][int(RobotHealth::kOffline)], 0);
+    }
+  }
 }

@@ -298,3 +298,33 @@ TEST(FleetManager, BadRobotReportsAreIgnoredWithAReason) {
   EXPECT_NE(d["last ignored robot report"].find("unknown robot id"), std::string::npos);
   EXPECT_EQ(fm.update_robots({moved}, 1.0, err), 0) << "a good, newer report is taken";
 }
+
+// Issue 25: a pickup counts only from a cell the execution layer accepted. Robot 0 reports its
+// pickup, five cells from where it was (a jump no move explains): the executor does not believe it,
+// and the task is not picked (before, the fleet counted the pickup from the report alone). Back
+// where it was, it goes to the pickup and picks the load there.
+TEST(FleetManager, NoPickupFromAReportTheExecutorRejected) {
+  const Grid g = warehouse();
+  FleetManager fm(g, config("pibt", 1));
+  SimFleet sim{fm, {{0, 0}}};
+  const SubmitResult task = fm.submit({5, 0, 11, 4, 0, 0});
+  ASSERT_TRUE(task.accepted);
+  sim.step();
+  auto state = [&] {
+    for (auto& [id, t] : fm.tasks(true))
+      if (id == task.task_id) return t.state;
+    return uint8_t(255);
+  };
+  EXPECT_EQ(state(), kAssigned);
+  const auto before = sim.xy[0];
+  std::string err;
+  for (int k = 0; k < 3; ++k) {
+    sim.now += 0.001;
+    ASSERT_TRUE(fm.update_robot(0, 5, 0, false, false, sim.now, err)) << err;
+    fm.tick(sim.now, sim.now, false);
+    EXPECT_EQ(state(), kAssigned) << "picked from a report the executor rejected";
+  }
+  sim.xy[0] = before;
+  for (int t = 0; t < 20 && state() == kAssigned; ++t) sim.step();
+  EXPECT_EQ(state(), kPicked);
+}

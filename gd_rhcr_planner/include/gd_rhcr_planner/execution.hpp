@@ -18,9 +18,12 @@
 //
 // Bad robots do not stop the fleet: a robot that never reported (missing) is left out once the
 // caller allows it; a robot that is offline, silent, or inconsistent (a report of a cell another
-// robot holds, or a move nobody commanded) becomes an immovable obstacle at its last known cell,
-// and every cell it may be entering is blocked; the other robots' undispatched commitments are
-// then rebuilt (a "resync"), so nobody waits for a robot that will not move.
+// robot is in or entering, a jump, or a move nobody commanded) becomes an immovable obstacle at its
+// last known cell, and every cell it may be entering is blocked; the other robots' undispatched
+// commitments are then rebuilt (a "resync"), so nobody waits for a robot that will not move. An
+// inconsistent robot is told to stay where it reports, and is believed once its report fits (a free
+// neighbour). A slip (a report of a free neighbour) is believed, also into a cell another robot was
+// sent into but has not left its own cell for: that robot's move is taken back.
 //
 // The planner's agents are the placed robots, each under one agent index for the executor's
 // lifetime, given when the robot is first placed (in robot id order: the identity when every
@@ -95,11 +98,17 @@ class Executor {
   // Between ticks: takes the robots' arrival reports (a robot at rest in the cell it was
   // commanded into) and dispatches the moves that this makes ready, at once rather than at the
   // next tick (a robot behind another enters its cell as soon as it has left). Any other report
-  // (a slip, a change of health) waits for the next tick. Returns the robots given a new move;
-  // command(r) is the cell to send each.
+  // (a slip, a change of health) waits for the next tick, and until then nobody is sent into a
+  // cell such a report names (or that a robot moving without a command may be entering).
+  // Returns the robots given a new move; command(r) is the cell to send each.
   std::vector<int> advance(const std::vector<RobotRecord>& robots, const std::vector<uint8_t>* hold = nullptr);
-  // The cell robot r is commanded now (its dispatched cell, else its own cell).
+  // The cell robot r is commanded now: its dispatched cell, else its own cell. An inconsistent
+  // robot is told to stay in the cell it reports (not sent on to a cell that may not be next to
+  // it); one moving where the executor cannot tell gets no command (kNoCell).
   Cell command(int r) const;
+  // Every robot's cell as the executor has accepted it (kNoCell: not placed); a report it rejected
+  // (inconsistent) is not in it. Fleet::set_accepted_cells takes it.
+  std::vector<Cell> accepted_cells() const;
 
   const ExecutorConfig& config() const { return cfg_; }
   void set_plan_deadline(double s) { cfg_.plan_deadline_s = s; }
@@ -136,8 +145,9 @@ class Executor {
   void reconcile(const std::vector<RobotRecord>& robots, TickOutput& out);
   bool place(int r, const RobotRecord& rec, TickOutput& out);
   bool fall_silent(int r, TickOutput& out);
-  bool take_report(int r, const RobotRecord& rec, TickOutput& out);
-  bool take_unexpected_cell(int r, Cell x, TickOutput& out);
+  bool take_report(int r, const std::vector<RobotRecord>& robots, TickOutput& out);
+  bool take_unexpected_cell(int r, Cell x, const std::vector<RobotRecord>& robots, TickOutput& out);
+  bool withdraw_move(int q, Cell x, int r, const std::vector<RobotRecord>& robots);
   bool set_health(int r, RobotHealth h, TickOutput& out);
   void resync();
   void arrive(int r);
@@ -145,8 +155,10 @@ class Executor {
   int revoke_behind_late();
   // Dispatches every move whose cell's earlier visitors have left, except to robots on hold;
   // `sent` (optional) gets the robots.
+  // `avoid` (optional, sorted): cells nobody is sent into now.
   int dispatch_ready(TickOutput& out, uint64_t stamp, const std::vector<uint8_t>& hold,
-                     std::vector<int>* sent = nullptr);
+                     std::vector<int>* sent = nullptr, const std::vector<Cell>* avoid = nullptr);
+  std::vector<Cell> unaccounted_cells(const std::vector<RobotRecord>& robots) const;
   int holder_of(Cell c, int except) const;
   void add_blocked_cells(int r, std::vector<Cell>& blocked) const;
   const gdrhcr::DistTable& dist_for(const std::vector<Cell>& obstacles);

@@ -88,6 +88,11 @@ class Fleet {
   // then greedy assignment of queued tasks to the nearest idle robots. Tasks whose pickup or
   // delivery an offline robot stands on wait in the queue until it leaves.
   void advance();
+  // The robots' cells as the execution layer accepted them (Executor::accepted_cells): a pickup or
+  // delivery is counted only when the robot reports its cell and the execution layer accepted it
+  // there (a report it rejected, a robot claiming another's cell or a jump, counts nothing).
+  // Until this is called, every report counts.
+  void set_accepted_cells(std::vector<Cell> cells);
   // Assignment by an outside dispatcher (dispatcher.hpp): with auto-assign off, advance() makes
   // the transitions only and leaves queued tasks to apply_assignments().
   void set_auto_assign(bool on) { auto_assign_ = on; }
@@ -139,10 +144,12 @@ class Fleet {
   void set_state(TaskRecord& t, uint8_t s, int robot, const std::string& reason);
   bool validate_cell(int x, int y, const char* what, Cell& out, std::string& reason) const;
   void forget_old_finished();
+  bool at_cell(int r, Cell c) const;  // robot r reports c, and the execution layer accepted it there
 
   const gdrhcr::Grid& grid_;
   const gdrhcr::DistTable& dist_;
   std::vector<RobotRecord> robots_;
+  std::vector<Cell> accepted_;  // set_accepted_cells; empty: every report counts
   std::map<uint64_t, TaskRecord> tasks_;
   std::vector<uint64_t> finished_order_;
   std::vector<TaskEvent> events_;

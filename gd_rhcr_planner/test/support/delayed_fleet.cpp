@@ -66,10 +66,12 @@ std::vector<std::vector<Cell>> DelayedFleet::goals(int& reached) {
 }
 
 // Takes robot i's command c: a moving robot must be told the cell it is entering; a robot at rest
-// remembers it and starts the move as soon as it is not delayed (see start_moves).
+// remembers it and starts the move as soon as it is not delayed (see start_moves). A robot that
+// reports a fake cell takes that cell for its own: told to stay there, it stays.
 std::string DelayedFleet::take_command(size_t i, Cell c) {
   SimRobot& s = robots_[i];
   if (c == kNoCell || s.missing || s.silent) return "";
+  if (s.fake != kNoCell && c == s.fake) c = s.cell;
   if (s.moving) {
     if (c != s.dst)
       return "robot " + std::to_string(i) + " is moving to " + g_.describe(s.dst) + " but was commanded " + g_.describe(c);
