@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <numeric>
 #include <sstream>
 
@@ -101,6 +103,8 @@ FleetManager::FleetManager(const gdrhcr::Grid& grid, FleetConfig cfg, Log sink)
     return;
   }
   store_ = std::make_unique<TaskStore>(cfg_.task_store);  // throws on a damaged store
+  snapshot_path_ = cfg_.task_store + ".robots";
+  read_snapshot();
   const auto& saved = store_->loaded();
   for (auto& w : saved.warnings) log(LogLevel::kWarn, w);
   const size_t n = fleet_->restore(saved.open, saved.delivered, saved.failed, saved.next_id);
@@ -364,6 +368,7 @@ FleetManager::Gathered FleetManager::gather_locked(double now, std::unique_ptr<D
   Gathered in;
   in.tick = ++tick_;
   apply_reconfigure_locked(retired);
+  if (first_report_ > 0 && now - first_report_ >= cfg_.offline_timeout) place_unreported_locked(now);
   for (int r : fleet_->mark_silent(now, cfg_.offline_timeout))
     log(LogLevel::kWarn, "robot " + std::to_string(r) + " sent no state for " + number(cfg_.offline_timeout) +
                              " s: offline (an obstacle at its last cell); its task is requeued");
@@ -385,6 +390,50 @@ FleetManager::Gathered FleetManager::gather_locked(double now, std::unique_ptr<D
   fleet_->fill_goals(in.goals);
   robot_records_locked(in.robots, in.held);
   return in;
+}
+
+// After a restart, a robot that has not reported since is where the previous run last knew it
+// (the robots' snapshot): it is placed there as an offline robot, an obstacle the fleet plans
+// around and gives no task, instead of being left out (another robot would be sent through the
+// cell it stands in); it falls silent if it stays quiet, and rejoins when it reports. One that
+// was commanded into another cell is placed as moving, so the cells around it stay clear too.
+void FleetManager::place_unreported_locked(double now) {
+  for (const auto& [r, snap] : unreported_) {
+    if (fleet_->robot(r).reported) continue;
+    std::string err;
+    if (!fleet_->update_robot(r, grid_.x_of(snap.first), grid_.y_of(snap.first), true, snap.second, err, now)) continue;
+    log(LogLevel::kWarn, "robot " + std::to_string(r) + " has not reported since the restart: an obstacle at " +
+                             grid_.describe(snap.first) + ", where it was last known, until it reports");
+  }
+  unreported_.clear();
+}
+
+// Where every placed robot is and whether it is commanded into another cell, for a successor
+// after a restart; written next to the task journal (tmp file, then rename).
+void FleetManager::write_snapshot_locked(const TickOutput& exec) const {
+  if (snapshot_path_.empty()) return;
+  const std::string tmp = snapshot_path_ + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::trunc);
+    for (size_t r = 0; r < exec.cells.size(); ++r)
+      if (exec.cells[r] != gdrhcr::kNoCell)
+        f << r << ' ' << exec.cells[r] << ' ' << (exec.command[r] != gdrhcr::kNoCell && exec.command[r] != exec.cells[r])
+          << '\n';
+    if (!f) return;
+  }
+  std::rename(tmp.c_str(), snapshot_path_.c_str());
+}
+
+void FleetManager::read_snapshot() {
+  std::ifstream f(snapshot_path_);
+  long long r = 0, cell = 0;
+  int moving = 0;
+  while (f >> r >> cell >> moving)
+    if (r >= 0 && r < cfg_.num_robots && grid_.is_free(static_cast<Cell>(cell)))
+      unreported_[static_cast<int>(r)] = {static_cast<Cell>(cell), moving != 0};
+  if (!unreported_.empty())
+    log(LogLevel::kInfo, "robots' snapshot " + snapshot_path_ + ": " + std::to_string(unreported_.size()) +
+                             " robots' last cells (for those that do not report after the restart)");
 }
 
 // What the execution layer gets of each robot: its record, and whether it is held.
@@ -421,6 +470,7 @@ TickResult FleetManager::tick(double now, double wall, bool view) {
     return out;
   }
   out.stepped = true;
+  write_snapshot_locked(exec);
   for (const std::string& w : exec.warnings) log(LogLevel::kWarn, w);
   // The primary planner's groups and paths, when it planned this tick (else it may still be
   // running an abandoned step on its worker and must not be read).

@@ -328,3 +328,44 @@ TEST(FleetManager, NoPickupFromAReportTheExecutorRejected) {
   for (int t = 0; t < 20 && state() == kAssigned; ++t) sim.step();
   EXPECT_EQ(state(), kPicked);
 }
+
+// Night shift: the planner is killed while a robot is silent. Its successor must not send the
+// others through the cell the silent robot stands in, though that robot never reports again.
+TEST(FleetManager, ARestartedPlannerKeepsARobotThatDoesNotReportWhereItWasLastKnown) {
+  const Grid g = Grid::from_rows({"........", ".@@@@@@.", "........"});
+  char path[] = "/tmp/fleet_manager_snapshot_XXXXXX";
+  const int fd = mkstemp(path);
+  ASSERT_GE(fd, 0);
+  close(fd);
+  std::remove(path);
+  FleetConfig c = config("pibt", 2);
+  c.task_store = path;
+  c.offline_timeout = 0.5;
+  {
+    FleetManager before(g, c);
+    std::string err;
+    ASSERT_TRUE(before.update_robot(0, 0, 0, false, false, 0.0, err));
+    ASSERT_TRUE(before.update_robot(1, 4, 0, false, false, 0.0, err));
+    ASSERT_TRUE(before.tick(0.1, 0.1, false).stepped);
+  }  // killed; robot 1 falls silent at (4, 0)
+  FleetManager after(g, c);
+  ASSERT_TRUE(after.submit({2, 0, 7, 0, 0, 0}).accepted);  // robot 0 must go past (4, 0)
+  SimFleet sim{after, {{0, 0}}};
+  std::string err;
+  std::set<Cell> visited;
+  for (int t = 0; t < 80; ++t) {
+    sim.now += 0.1;
+    ASSERT_TRUE(after.update_robot(0, sim.xy[0].first, sim.xy[0].second, false, false, sim.now, err)) << err;
+    const TickResult r = after.tick(sim.now, sim.now, false);
+    for (const auto& cmd : r.commands) {
+      if (cmd.robot != 0) continue;
+      EXPECT_NE(cmd.cell, g.cell(4, 0)) << "robot 0 sent into silent robot 1's cell at tick " << t;
+      sim.xy[0] = {g.x_of(cmd.cell), g.y_of(cmd.cell)};
+      visited.insert(cmd.cell);
+    }
+  }
+  EXPECT_TRUE(visited.count(g.cell(7, 0))) << "robot 0 went round by the lower corridor";
+  EXPECT_TRUE(after.tasks(false).empty()) << "and delivered";
+  std::remove(path);
+  std::remove((std::string(path) + ".robots").c_str());
+}

@@ -172,6 +172,9 @@ class FleetManager {
   struct Gathered;
   Gathered gather_locked(double now, std::unique_ptr<DeadlinePlanner>& retired);
   void robot_records_locked(std::vector<RobotRecord>& robots, std::vector<uint8_t>& held) const;
+  void place_unreported_locked(double now);
+  void write_snapshot_locked(const TickOutput& exec) const;
+  void read_snapshot();
   void apply_reconfigure_locked(std::unique_ptr<DeadlinePlanner>& retired);
   void count_outcome_locked(const TickOutput& exec);
   std::vector<RobotCommand> commands_locked(const std::vector<Cell>& command) const;
@@ -221,6 +224,8 @@ class FleetManager {
   std::map<std::string, double> last_logged_;
   std::vector<double> last_stamp_;  // per robot: the stamp of its last accepted report
   std::string last_ignored_;        // why the last ignored report was ignored
+  std::string snapshot_path_;       // the robots' cells for a successor (with the task store only)
+  std::map<int, std::pair<Cell, bool>> unreported_;  // from the snapshot: robot -> (cell, moving)
   uint64_t rejected_tasks_ = 0;
   std::string last_rejected_task_;
 };
