@@ -28,7 +28,7 @@ void MAPFPlanner::initialize(int /*preprocess_time_limit*/) {
   }
 }
 
-void MAPFPlanner::plan(int /*time_limit*/, std::vector<Action>& actions) {
+void MAPFPlanner::plan(int time_limit, std::vector<Action>& actions) {
   const int n = env->num_of_agents;
   std::vector<int> locations(n), headings(n), out;
   std::vector<std::vector<int>> goals(n);
@@ -38,7 +38,7 @@ void MAPFPlanner::plan(int /*time_limit*/, std::vector<Action>& actions) {
     for (auto& g : env->goal_locations[i]) goals[i].push_back(g.first);
   }
   try {
-    bridge_->plan(env->curr_timestep, locations, headings, goals, out);
+    bridge_->plan(env->curr_timestep, time_limit, locations, headings, goals, out);
   } catch (const std::exception& e) {
     fail("plan", e);
   }

@@ -4,6 +4,7 @@
 #include "lorr_bridge.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
@@ -18,6 +19,7 @@
 namespace gdrhcr_lorr {
 
 using namespace gdrhcr;
+using Clock = std::chrono::steady_clock;
 
 namespace {
 
@@ -87,6 +89,8 @@ BridgeOptions bridge_options_from_env() {
   o.params = parse_params(env_or("GDRHCR_PARAMS", ""));
   o.budget_ms = env_number("GDRHCR_BUDGET_MS", 0);
   o.seed = static_cast<uint64_t>(env_number("GDRHCR_SEED", 0));
+  o.dist_budget_mb = static_cast<int>(env_number("GDRHCR_DIST_MB", o.dist_budget_mb));
+  if (o.dist_budget_mb < 1) throw std::invalid_argument("GDRHCR_DIST_MB must be at least 1");
   try {
     o.turns = env_or("GDRHCR_TURNS", "");
     if (!o.turns.empty()) parse_turn_planning(o.turns);  // a bad value is named now
@@ -98,7 +102,8 @@ BridgeOptions bridge_options_from_env() {
 
 struct Bridge::Impl {
   Impl(int rows, int cols, const std::vector<int>& map, int n, const BridgeOptions& o)
-      : options(o), grid(grid_of(rows, cols, map)), dist(grid, ActionModel::kRotation), num_agents(n) {
+      : options(o), grid(grid_of(rows, cols, map)),
+        dist(grid, ActionModel::kRotation, size_t(o.dist_budget_mb) << 20), num_agents(n) {
     Params params;
     for (auto& [k, v] : o.params) params.set(k, v);
     const double budget_s = o.budget_ms / 1000.0;
@@ -108,7 +113,15 @@ struct Bridge::Impl {
     const PlannerParams values = PlannerParams::resolve(o.planner, params, MapFacts(grid, n));
     params.check_all_used("GDRHCR_PARAMS for planner " + o.planner);
     const TurnPlanning turns = o.turns.empty() ? kLorrTurnPlanning : parse_turn_planning(o.turns);
-    planner = make_planner_in(values, grid, n, o.seed, ActionModel::kRotation, turns);
+    if (turns == TurnPlanning::kMapfWait) {
+      auto wrapped = std::make_unique<MapfInRotation>(make_planner(values, grid, n, o.seed), grid,
+                                                      size_t(o.dist_budget_mb) << 20);
+      planning_dist = &wrapped->mapf_dist();
+      planner = std::move(wrapped);
+    } else {
+      planner = make_planner(values, grid, n, o.seed, ActionModel::kRotation);
+      planning_dist = &dist;
+    }
     std::fprintf(stderr, "gdrhcr lorr adapter: planner %s, turns %s, budget %g ms\n", o.planner.c_str(),
                  turn_planning_name(turns), o.budget_ms);
     pos.resize(n);
@@ -118,9 +131,22 @@ struct Bridge::Impl {
     goals.resize(n);
   }
 
+  // The distance rows of every agent's goals, computed until `deadline`; false if some are
+  // still missing then. A row costs a search over the map, and the first step of a fleet of
+  // thousands needs thousands of them.
+  bool warm_rows(Clock::time_point deadline) const {
+    for (auto& g : goals)
+      for (Cell c : g) {
+        if (Clock::now() > deadline) return false;
+        planning_dist->row(c);
+      }
+    return true;
+  }
+
   BridgeOptions options;
   Grid grid;
-  DistTable dist;
+  DistTable dist;  // rotation rows: the world's, and the native planners'
+  const DistTable* planning_dist = nullptr;  // the rows the planner uses
   int num_agents;
   std::unique_ptr<Planner> planner;
   std::vector<Cell> pos, next;
@@ -133,8 +159,10 @@ Bridge::Bridge(int rows, int cols, const std::vector<int>& map, int num_agents, 
 
 Bridge::~Bridge() = default;
 
-void Bridge::plan(int timestep, const std::vector<int>& locations, const std::vector<int>& headings,
-                  const std::vector<std::vector<int>>& goal_locations, std::vector<int>& actions) {
+void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& locations,
+                  const std::vector<int>& headings, const std::vector<std::vector<int>>& goal_locations,
+                  std::vector<int>& actions) {
+  const auto t0 = Clock::now();
   Impl& m = *impl_;
   const int n = m.num_agents;
   if (static_cast<int>(locations.size()) != n || static_cast<int>(headings.size()) != n)
@@ -146,15 +174,22 @@ void Bridge::plan(int timestep, const std::vector<int>& locations, const std::ve
     const auto& g = i < static_cast<int>(goal_locations.size()) ? goal_locations[i] : std::vector<int>{};
     for (int c : g) m.goals[i].push_back(c);
     if (m.goals[i].empty()) m.goals[i].push_back(m.pos[i]);  // no task: stay put
+    m.headings[i] = static_cast<Heading>(headings[i]);
+  }
+  actions.assign(n, kStartKitWait);
+  // Rows first, within half the Start-Kit's limit; a step that spent over 30% of it on them
+  // waits (valid), so the planner's own step never runs late.
+  const auto limit = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(time_limit_s));
+  if (!m.warm_rows(t0 + limit / 2) || Clock::now() - t0 > limit * 3 / 10) {
+    std::fprintf(stderr, "gdrhcr lorr adapter: timestep %d: computing distance rows, every agent waits\n", timestep);
+    return;
   }
   std::fill(m.next.begin(), m.next.end(), kNoCell);
-  for (int i = 0; i < n; ++i) m.headings[i] = static_cast<Heading>(headings[i]);
   WorldView view{m.grid, m.dist, timestep, m.pos, m.goals};
   view.action_model = ActionModel::kRotation;
   view.headings = &m.headings;
   view.next_headings = &m.next_headings;
   m.planner->plan_step(view, m.next);
-  actions.assign(n, kStartKitWait);
   for (int i = 0; i < n; ++i) {
     const auto a = action_between(m.grid, Pose{m.pos[i], m.headings[i]}, Pose{m.next[i], m.next_headings[i]});
     if (!a) throw std::logic_error("lorr adapter: the planner's step for agent " + std::to_string(i) + " is no action");

@@ -17,6 +17,8 @@ namespace gdrhcr_lorr {
 //   GDRHCR_BUDGET_MS  our planner's time per step in ms (0 = none): GD-RHCR's step-budget and
 //                     RHCR's PBS timeout unless GDRHCR_PARAMS sets them
 //   GDRHCR_SEED       seed for the planner's tie-breaks (default 0)
+//   GDRHCR_DIST_MB    memory for distance rows (default 2048: a fleet of 10,000 on LoRR's
+//                     warehouse holds about 10,000 rows of 77 KB)
 //   GDRHCR_TURNS      mapf-wait (the planner's mapf steps with turns and waits,
 //                     gdrhcr::MapfInRotation) or native (its own rotation planning); default
 //                     gdrhcr::kLorrTurnPlanning
@@ -26,6 +28,7 @@ struct BridgeOptions {
   double budget_ms = 0;
   uint64_t seed = 0;
   std::string turns;  // "native" or "mapf-wait"; empty = gdrhcr::kLorrTurnPlanning
+  int dist_budget_mb = 2048;
 };
 // Throws std::invalid_argument naming the variable for a malformed value.
 BridgeOptions bridge_options_from_env();
@@ -36,10 +39,12 @@ class Bridge {
   // message naming the problem (unknown planner or parameter, bad value).
   Bridge(int rows, int cols, const std::vector<int>& map, int num_agents, const BridgeOptions& options);
   ~Bridge();
-  // One timestep: locations and headings (0 east, 1 south, 2 west, 3 north) of every agent and
-  // its revealed goal locations, current one first (empty: no task). actions[i] gets the
-  // Start-Kit's Action value (0 FW, 1 CR, 2 CCR, 3 W).
-  void plan(int timestep, const std::vector<int>& locations, const std::vector<int>& headings,
+  // One timestep within the Start-Kit's time_limit_s: locations and headings (0 east, 1 south,
+  // 2 west, 3 north) of every agent and its revealed goal locations, current one first (empty:
+  // no task). actions[i] gets the Start-Kit's Action value (0 FW, 1 CR, 2 CCR, 3 W). The
+  // distance rows of new goals are computed first, within half the limit; a step that needs
+  // longer (the first of a fleet of thousands) is all waits, and the next ones go on with them.
+  void plan(int timestep, double time_limit_s, const std::vector<int>& locations, const std::vector<int>& headings,
             const std::vector<std::vector<int>>& goals, std::vector<int>& actions);
 
  private:

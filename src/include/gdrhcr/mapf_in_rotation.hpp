@@ -38,6 +38,8 @@ class MapfInRotation : public Planner {
   nlohmann::json stats() const override;
   std::vector<PlannerGroup> groups() const override { return inner_->groups(); }
   std::vector<Cell> planned_path(int agent) const override { return inner_->planned_path(agent); }
+  // The mapf distance rows the inner planner plans with.
+  const DistTable& mapf_dist() const { return dist_; }
 
  private:
   std::unique_ptr<Planner> inner_;
