@@ -12,6 +12,8 @@
 // --between 1 (default): moves are dispatched the moment the robots ahead have left (the node's
 // dispatch timer, Executor::advance after every substep); 0: at ticks only. --revoke 1 (default):
 // moves queued behind late robots are taken back and planned again (ExecutorConfig); 0: kept.
+// --step-ticks M: a planning step stands for M ticks of the delay process (LoRR 2026's moves of 3
+// ticks: --step-ticks 3 --speed 10); delays start with p_delay per tick and last 1..D ticks.
 // --late N: robots 0..N-1 are off the floor (they never reported) until --join-tick; then they
 // report, at their cell if it is free, else at a free one (a robot joining the fleet late).
 // Each robot's goals come from its own random stream, so both runs of a seed give every robot
@@ -36,6 +38,7 @@ struct Options {
   std::string map = "maps/warehouse-10-20-10-2-1.map", planner = "gd-rhcr";
   int robots = 300, ticks = 300, max_delay = 20, speed = 6, seeds = 1, commit_horizon = 2, between = 1, revoke = 1;  // the node's defaults
   int late = 0, join_tick = 50;  // robots 0..late-1 are off the floor until join_tick
+  int step_ticks = 1;            // ticks of the delay process per planning step (DelayedFleet::ticks_per_step)
   double p_delay = 0.01;
   std::vector<std::pair<std::string, std::string>> params;  // --param key=value, for the planner
 };
@@ -62,6 +65,7 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
   Executor ex(g, dist, o.robots, cfg);
   DelayedFleet fleet(g, o.robots, seed, o.speed, o.speed);
   for (int i = 0; i < o.late; ++i) fleet.robots()[i].missing = true;
+  fleet.ticks_per_step = o.step_ticks;
   Result r;
   for (int t = 0; t < o.ticks; ++t) {
     if (t == o.join_tick)
@@ -109,6 +113,7 @@ Options read_options(const BenchOptions& cl) {
   o.revoke = static_cast<int>(cl.integer("revoke", o.revoke, 0, 1));
   o.late = static_cast<int>(cl.integer("late", o.late, 0, o.robots));
   o.join_tick = static_cast<int>(cl.integer("join-tick", o.join_tick, 0, 10000000));
+  o.step_ticks = static_cast<int>(cl.integer("step-ticks", o.step_ticks, 1, SimRobot::kSub));
   for (const std::string& kv : cl.all("param")) {
     const size_t eq = kv.find('=');
     if (eq == std::string::npos || eq == 0) throw BenchOptionError("--param must be key=value, not '" + kv + "'");
@@ -135,9 +140,11 @@ void print_usage() {
       "  --revoke 0|1          take back moves queued behind late robots (%d)\n"
       "  --late N              robots 0..N-1 are off the floor (never reported) until --join-tick, 0..robots (%d)\n"
       "  --join-tick T         the tick at which they report (%d)\n"
+      "  --step-ticks M        ticks of the delay process per planning step, 1..%d: a step stands for M ticks\n"
+      "                        (moves of M ticks with --speed %d); p-delay and max-delay are per tick (%d)\n"
       "  --param key=value     a planner parameter (repeatable)\n",
       d.map.c_str(), d.planner.c_str(), d.robots, d.ticks, d.p_delay, d.max_delay, SimRobot::kSub, d.speed, d.seeds,
-      d.commit_horizon, d.between, d.revoke, d.late, d.join_tick);
+      d.commit_horizon, d.between, d.revoke, d.late, d.join_tick, SimRobot::kSub, SimRobot::kSub, d.step_ticks);
 }
 
 // Both runs of every seed and the figures; returns the exit code.
@@ -147,10 +154,11 @@ int run_all(const Options& o) {
     throw BenchOptionError("--robots " + std::to_string(o.robots) + ": the map has " +
                            std::to_string(map.grid.free_cells().size()) + " free cells");
   std::printf("map %s, %d robots, planner %s, ADG execution (commit horizon %d, dispatch %s), %d ticks, moves take %.1f tick, "
-              "delays p %.3f per tick of 1..%d ticks, random goals\n",
+              "delays p %g per tick of 1..%d ticks, random goals\n",
               o.map.c_str(), o.robots, o.planner.c_str(), o.commit_horizon, o.between ? "on arrival" : "at ticks", o.ticks,
               o.speed / double(SimRobot::kSub), o.p_delay, o.max_delay);
   if (o.late > 0) std::printf("robots 0..%d join at tick %d\n", o.late - 1, o.join_tick);
+  if (o.step_ticks > 1) std::printf("a planning step stands for %d ticks of the delay process\n", o.step_ticks);
   std::printf("%5s %14s %14s %7s %16s %16s %12s %14s\n", "seed", "goals/tick no", "goals/tick p", "ratio",
               "delayed robots", "waiting no / p", "held moves", "moves no / p");
   double sum_ratio = 0;
@@ -176,7 +184,7 @@ int run_all(const Options& o) {
 int main(int argc, char** argv) {
   try {
     const BenchOptions cl(argc, argv, {"map", "planner", "robots", "ticks", "p-delay", "max-delay", "speed", "seeds",
-                                       "commit-horizon", "between", "revoke", "late", "join-tick", "param"});
+                                       "commit-horizon", "between", "revoke", "late", "join-tick", "step-ticks", "param"});
     if (cl.help()) {
       print_usage();
       return 0;

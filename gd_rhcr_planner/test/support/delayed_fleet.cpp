@@ -2,6 +2,7 @@
 #include "delayed_fleet.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <unordered_map>
 
 namespace gd_rhcr_planner {
@@ -100,10 +101,13 @@ void DelayedFleet::start_moves() {
 std::string DelayedFleet::execute(const TickOutput& out, double p_delay, int max_delay_ticks, const Between& between) {
   std::uniform_real_distribution<double> u(0, 1);
   std::uniform_int_distribution<int> d(1, std::max(1, max_delay_ticks));
+  const int m = std::max(1, ticks_per_step);
+  const double p_step = m == 1 ? p_delay : 1 - std::pow(1 - p_delay, m);
   for (size_t i = 0; i < robots_.size(); ++i) {
     SimRobot& s = robots_[i];
     if (s.missing || s.silent) continue;
-    if (s.delay == 0 && p_delay > 0 && u(delay_rng_) < p_delay) s.delay = d(delay_rng_) * SimRobot::kSub;
+    if (s.delay == 0 && p_delay > 0 && u(delay_rng_) < p_step)
+      s.delay = m == 1 ? d(delay_rng_) * SimRobot::kSub : std::max(1, (d(delay_rng_) * SimRobot::kSub + m / 2) / m);
     std::string err = take_command(i, out.command[i]);
     if (!err.empty()) return err;
   }

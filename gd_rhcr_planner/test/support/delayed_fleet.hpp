@@ -63,6 +63,11 @@ class DelayedFleet {
   void join(size_t i);
 
   gdrhcr::Cell collision_cell = gdrhcr::kNoCell;
+  // Ticks of the delay process per tick of execute (a planning step): with 3, a step stands for
+  // three League ticks (moves of 3 ticks when a move takes the whole step): a delay starts with
+  // probability 1 - (1 - p_delay)^3 per step and its 1..max_delay_ticks ticks last a third as many
+  // steps each (at least one substep). 1: the delay process runs per step.
+  int ticks_per_step = 1;
 
   // Dispatch on arrival, as the node's dispatch timer does: the robots' reports go to ex.advance
   // and the moves it frees are sent at once.
