@@ -82,8 +82,8 @@ class PibtStep {
   bool push(const WorldView& world, int ai, int aj, std::vector<Cell>& next);
 
   // Rotation model: operations (see above; pibt_operations.cpp).
-  static constexpr int kOpDepth = 12;    // displaced agents planned recursively, at most this deep
-  static constexpr int kOpBudget = 400;  // operation plans per agent of the main loop
+  static constexpr int kOpDepth = 30;    // displaced agents planned recursively, at most this deep
+  static constexpr int kOpBudget = 1000;  // operation plans per agent of the main loop
   struct OpPath {
     Cell cell[kOpSteps + 1];
     Heading heading[kOpSteps + 1];
