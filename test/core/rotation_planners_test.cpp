@@ -11,6 +11,7 @@
 #include "gdrhcr/planner.hpp"
 #include "gdrhcr/simulator.hpp"
 #include "gdrhcr/task_stream.hpp"
+#include "gdrhcr/validator.hpp"
 
 using namespace gdrhcr;
 
@@ -80,5 +81,79 @@ TEST(RotationPlanners, GuidedPibtWithForecastTurnsValidly) {
     guided.set("guidance", "local");
     guided.set("lg-forecast", "8");
     run_valid("pibt", map, ActionModel::kRotation, 120, 40, guided);
+  }
+}
+
+namespace {
+// A 2-lane corridor (as immovable_test.cpp's): the traffic must switch lanes, turning, to pass
+// a robot that stopped in the lower lane or a blocked cell there.
+Grid corridor() { return Grid::from_rows({"@@@@@@@@@@@@", "............", "............", "@@@@@@@@@@@@"}); }
+
+std::unique_ptr<Planner> build_rotation(const std::string& name, const Grid& g, int n) {
+  Params p;
+  if (name == "guided-pibt") p.set("guidance", "local");
+  if (name == "rhcr" || name == "gd-rhcr") p.set("node-budget", "2000"), p.set("H", "8");
+  if (name == "rhcr") p.set("alpha", "2");
+  return make_planner(name == "guided-pibt" ? "pibt" : name, p, g, n, 3, ActionModel::kRotation);
+}
+
+// Steps the planner in rotation; `stay` (optional) is an agent that must keep its cell and
+// heading, `blocked` cells nobody may enter. Every step is validated as rotation actions.
+// Returns which agents reached their first goal.
+std::vector<bool> run_corridor(const std::string& name, const DistTable& dist, std::vector<Cell> pos,
+                               std::vector<Heading> heads, const std::vector<std::vector<Cell>>& goals,
+                               const std::vector<uint8_t>* immovable, const std::vector<Cell>* blocked, int steps) {
+  const Grid& g = dist.grid();
+  auto planner = build_rotation(name, g, static_cast<int>(pos.size()));
+  StepValidator validator(g, ActionModel::kRotation);
+  std::vector<bool> reached(pos.size(), false);
+  for (int t = 0; t < steps; ++t) {
+    WorldView w{g, dist, t, pos, goals};
+    w.immovable = immovable;
+    w.blocked = blocked;
+    w.action_model = ActionModel::kRotation;
+    std::vector<Heading> next_heads(heads.size(), kNoHeading);
+    w.headings = &heads;
+    w.next_headings = &next_heads;
+    std::vector<Cell> next(pos.size(), kNoCell);
+    planner->plan_step(w, next);
+    const auto bad = validator.check(pos, next, &heads, &next_heads);
+    EXPECT_FALSE(bad) << name << ": " << bad->describe(g, t);
+    if (bad) break;
+    for (size_t i = 0; immovable && i < pos.size(); ++i)
+      if ((*immovable)[i]) EXPECT_TRUE(next[i] == pos[i] && next_heads[i] == heads[i]) << name << " moved agent " << i;
+    for (Cell c : next)
+      if (blocked) EXPECT_EQ(std::count(blocked->begin(), blocked->end(), c), 0) << name << " entered a blocked cell";
+    pos = next, heads = next_heads;
+    for (size_t i = 0; i < pos.size(); ++i) reached[i] = reached[i] || pos[i] == goals[i][0];
+  }
+  return reached;
+}
+}  // namespace
+
+TEST(RotationPlanners, OthersTurnPastAnOfflineRobot) {
+  const Grid g = corridor();
+  const Cell offline = g.cell(6, 2);
+  DistTable dist(g, std::vector<Cell>{offline}, ActionModel::kRotation);
+  const std::vector<Cell> pos = {offline, g.cell(0, 2), g.cell(11, 2), g.cell(0, 1)};
+  const std::vector<Heading> heads = {kNorth, kEast, kWest, kEast};
+  const std::vector<std::vector<Cell>> goals = {{offline}, {g.cell(11, 2)}, {g.cell(1, 2)}, {g.cell(11, 1)}};
+  const std::vector<uint8_t> immovable = {1, 0, 0, 0};
+  for (const char* name : {"pibt", "guided-pibt", "rhcr", "gd-rhcr"}) {
+    const auto reached = run_corridor(name, dist, pos, heads, goals, &immovable, nullptr, 80);
+    EXPECT_TRUE(reached[1] && reached[2] && reached[3]) << name << ": " << reached[1] << reached[2] << reached[3];
+  }
+}
+
+TEST(RotationPlanners, NobodyEntersABlockedCellAndLookaheadPlannersTurnAround) {
+  const Grid g = corridor();
+  DistTable dist(g, ActionModel::kRotation);
+  const std::vector<Cell> blocked = {g.cell(6, 2)};
+  const std::vector<Cell> pos = {g.cell(1, 2), g.cell(10, 1)};
+  const std::vector<std::vector<Cell>> goals = {{g.cell(11, 2)}, {g.cell(0, 1)}};
+  for (const char* name : {"pibt", "guided-pibt", "rhcr", "gd-rhcr"}) {
+    const auto reached = run_corridor(name, dist, pos, {kEast, kWest}, goals, nullptr, &blocked, 50);
+    // Plain PIBT only knows distances that ignore the blocked cell: it may wait before it.
+    if (std::string(name) != "pibt") EXPECT_TRUE(reached[0]) << name << ": never got past the blocked cell";
   }
 }
