@@ -120,7 +120,9 @@ def num(d, k):
         return None
 r = {
     "robots": int(robots), "duration_s": int(duration), "seed": int(seed), "commit": commit,
-    "collisions": sa["vertex_collisions"] + int(num(sim, "collisions") or 0), "swaps": sa["swaps"] + int(num(sim, "swaps") or 0),
+    # the same events seen by two observers: the soak (reported cells) and fleet_sim (physical)
+    "collisions": max(sa["vertex_collisions"], int(num(sim, "collisions") or 0)),
+    "swaps": max(sa["swaps"], int(num(sim, "swaps") or 0)),
     "jumps": sa["jumps"], "interlock_would_act": int(num(sim, "interlock would act") or 0),
     "accepted": t["accepted"], "delivered": t["delivered"], "open": t["open"], "failed": t["failed"],
     "lost_tasks": t["lost"] + t["unacknowledged"], "planner_kills": int(kills), "kill_period_s": int(kill_period),
