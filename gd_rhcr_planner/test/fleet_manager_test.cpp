@@ -5,7 +5,10 @@
 // restart, and the node's configuration file.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <set>
@@ -40,6 +43,15 @@ FleetConfig config(const std::string& planner, int robots) {
   c.offline_timeout = 1e6;
   c.task_store = "";
   return c;
+}
+
+// A fresh path for a task journal (no file there yet).
+std::string journal_path() {
+  char path[] = "/tmp/fleet_manager_test_XXXXXX";
+  const int fd = mkstemp(path);
+  if (fd >= 0) close(fd);
+  std::remove(path);
+  return path;
 }
 
 // Robots that follow their commands at once: each tick they report the cell they were sent to.
@@ -227,11 +239,7 @@ TEST(FleetManager, AHeldRobotGetsNoNewMove) {
 
 TEST(FleetManager, AcceptedTasksSurviveARestartThroughTheJournal) {
   const Grid g = warehouse();
-  char path[] = "/tmp/fleet_manager_test_XXXXXX";
-  const int fd = mkstemp(path);
-  ASSERT_GE(fd, 0);
-  close(fd);
-  std::remove(path);
+  const std::string path = journal_path();
   FleetConfig c = config("pibt", 2);
   c.task_store = path;
   uint64_t id = 0;
@@ -247,7 +255,7 @@ TEST(FleetManager, AcceptedTasksSurviveARestartThroughTheJournal) {
   ASSERT_EQ(open.size(), 1u);
   EXPECT_EQ(open[0].first, id);
   EXPECT_EQ(open[0].second.priority, 3);
-  std::remove(path);
+  std::remove(path.c_str());
 }
 
 // Hostile reports are ignored with a reason and never move a robot.
@@ -333,11 +341,7 @@ TEST(FleetManager, NoPickupFromAReportTheExecutorRejected) {
 // others through the cell the silent robot stands in, though that robot never reports again.
 TEST(FleetManager, ARestartedPlannerKeepsARobotThatDoesNotReportWhereItWasLastKnown) {
   const Grid g = Grid::from_rows({"........", ".@@@@@@.", "........"});
-  char path[] = "/tmp/fleet_manager_snapshot_XXXXXX";
-  const int fd = mkstemp(path);
-  ASSERT_GE(fd, 0);
-  close(fd);
-  std::remove(path);
+  const std::string path = journal_path();
   FleetConfig c = config("pibt", 2);
   c.task_store = path;
   c.offline_timeout = 0.5;
@@ -366,6 +370,6 @@ TEST(FleetManager, ARestartedPlannerKeepsARobotThatDoesNotReportWhereItWasLastKn
   }
   EXPECT_TRUE(visited.count(g.cell(7, 0))) << "robot 0 went round by the lower corridor";
   EXPECT_TRUE(after.tasks(false).empty()) << "and delivered";
-  std::remove(path);
-  std::remove((std::string(path) + ".robots").c_str());
+  std::remove(path.c_str());
+  std::remove((path + ".robots").c_str());
 }

@@ -212,23 +212,33 @@ class GroupPictureTest(unittest.TestCase):
         self.assertEqual(links, [(1, 2)])
 
 
+def canonical(key):
+    """A parameter's name as the core reads it (Params::canonical): '_' as '-', lower case past one letter."""
+    key = key.replace("_", "-") if len(key) > 1 else key
+    return key.lower() if len(key) > 1 else key
+
+
+def sim_help():
+    """`gdrhcr_sim --help` and its parameter rows: {planner: {name: (range, default)}}."""
+    out = subprocess.run([SIM, "--help"], capture_output=True, text=True, check=True).stdout
+    rows, planner = {}, None
+    for line in out.splitlines():
+        if line.startswith("--planner "):
+            planner = line.split()[1]
+            rows[planner] = {}
+        elif planner and line.startswith("  --"):
+            name, rest = line[4:].split(" ", 1)
+            rng, default = rest.split(", default ", 1)
+            rows[planner][name] = (rng, default.split(":", 1)[0])
+    return out, rows
+
+
 class ExperimentConfigTest(unittest.TestCase):
     """Every planner option in config/experiments/*.yaml is a parameter of that planner in the
     parameter table (as `gdrhcr_sim --help` lists it), so a sweep never dies on a misspelt one."""
 
-    def planner_params(self):
-        out = subprocess.run([SIM, "--help"], capture_output=True, text=True, check=True).stdout
-        params, planner = {}, None
-        for line in out.splitlines():
-            if line.startswith("--planner "):
-                planner = line.split()[1]
-                params[planner] = set()
-            elif planner and line.startswith("  --"):
-                params[planner].add(line.split()[0][2:])
-        return params
-
     def test_experiment_configs_use_known_parameters(self):
-        known = self.planner_params()
+        known = sim_help()[1]
         self.assertEqual(sorted(known), ["gd-rhcr", "pibt", "rhcr"])
         configs = sorted(f for f in os.listdir(os.path.join(ROOT, "config", "experiments")) if f.endswith(".yaml"))
         self.assertGreater(len(configs), 3)
@@ -238,30 +248,15 @@ class ExperimentConfigTest(unittest.TestCase):
                 opts = dict(run["options"])
                 planner = opts.pop("planner", "pibt")
                 for key in opts:
-                    canon = key.replace("_", "-") if len(key) > 1 else key
-                    canon = canon.lower() if len(canon) > 1 else canon
-                    self.assertIn(canon, known[planner], "%s: %s has no parameter %s" % (name, planner, key))
+                    self.assertIn(canonical(key), known[planner], "%s: %s has no parameter %s" % (name, planner, key))
 
 
 class ParameterTableConsumersTest(unittest.TestCase):
     """The README's parameter list and dynamic_reconfigure's cfg/Planner.cfg come from the
     parameter table (as `gdrhcr_sim --help` prints it)."""
 
-    def help_rows(self):
-        out = subprocess.run([SIM, "--help"], capture_output=True, text=True, check=True).stdout
-        rows, planner = {}, None
-        for line in out.splitlines():
-            if line.startswith("--planner "):
-                planner = line.split()[1]
-                rows[planner] = {}
-            elif planner and line.startswith("  --"):
-                name, rest = line[4:].split(" ", 1)
-                rng, default = rest.split(", default ", 1)
-                rows[planner][name] = (rng, default.split(":", 1)[0])
-        return out, rows
-
     def test_readme_parameter_list_is_the_tables(self):
-        out, _ = self.help_rows()
+        out, _ = sim_help()
         made = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "readme_params.py")], input=out,
                               capture_output=True, text=True, check=True).stdout.strip()
         with open(os.path.join(ROOT, "README.md")) as f:
@@ -272,14 +267,13 @@ class ParameterTableConsumersTest(unittest.TestCase):
                          "README's list is stale: build/src/gdrhcr_sim --help | python3 tools/readme_params.py")
 
     def test_reconfigure_planner_parameters_are_the_tables(self):
-        _, rows = self.help_rows()
+        _, rows = sim_help()
         with open(os.path.join(ROOT, "gd_rhcr_planner", "cfg", "Planner.cfg")) as f:
             cfg = f.read()
         found = re.findall(r'planner\.add\("(\w+)", (\w+), 0, "[^"]*", ([^,]+), ([^,]+), ([^,)]+)\)', cfg)
         self.assertEqual(sorted(f[0] for f in found), ["H", "K_threshold", "V", "c_soft"])
         for name, _, default, lo, hi in found:
-            canon = name.replace("_", "-") if len(name) > 1 else name
-            canon = canon.lower() if len(canon) > 1 else canon
+            canon = canonical(name)
             rng, table_default = rows["gd-rhcr"][canon]
             tlo, thi = (float(x) for x in rng.strip("[]").split(", "))
             if canon == "k-threshold":
