@@ -486,7 +486,9 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
                      [&](int a, int b) { return pibt_.priority(a) > pibt_.priority(b); });
     arena_->arena.execute([&] { guidance_->update(world, order, budget_.guidance); });  // banded: threads
     std::vector<Cell> preferred(world.num_agents(), kNoCell);
-    for (int i : agents) preferred[i] = guidance_->next_cell(i, world.timestep, world.positions[i]);
+    for (int i : agents)
+      preferred[i] = world.rotation() ? guidance_->next_move(i, world.timestep, world.positions[i])
+                                      : guidance_->next_cell(i, world.timestep, world.positions[i]);
     pibt_.step(world, moves, agents, fixed, &preferred);
     for (int i : agents) {  // how often the guidance foretold the move (it had a cell for it)
       if (preferred[i] == kNoCell) continue;

@@ -66,7 +66,9 @@ StepReport PibtPlanner::plan_step(const WorldView& world, std::vector<Cell>& nex
     if (forecast_) forecast_->seed(world, order_, *guidance_);
     guidance_->update(world, order_);
     preferred_.resize(n);
-    for (int i = 0; i < n; ++i) preferred_[i] = guidance_->next_cell(i, now_, world.positions[i]);
+    for (int i = 0; i < n; ++i)
+      preferred_[i] = world.rotation() ? guidance_->next_move(i, now_, world.positions[i])
+                                       : guidance_->next_cell(i, now_, world.positions[i]);
     pibt_.step(world, next, {}, {}, &preferred_);
     if (forecast_) forecast_->roll(world, next, order_, pibt_, *guidance_);
   } else {

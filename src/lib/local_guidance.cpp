@@ -306,7 +306,9 @@ void LocalGuidance::Marks::grow() {
 }
 
 // Space-time A* over (t, cell), t = 0..W: cost 1 per step plus its collision penalty (meeting
-// other paths); heuristic the distance to the goal.
+// other paths); heuristic the distance to the goal. In the rotation model over (t, cell,
+// heading): forward into the faced cell, a quarter turn or a wait, one step each (a turn pays as
+// a wait), heuristic the distance with turns; the path keeps only the cells (a turn repeats one).
 // Among equal f the deeper node goes first, so free paths are found almost without branching.
 void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::minstd_rand& rng, Counts& counts) {
   ++counts.searches;
@@ -322,19 +324,26 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
   }
   const auto row_ptr = world.dist.row(goal);
   const DistRow& row = *row_ptr;
+  const bool rot = world.rotation();
+  const int states = rot ? kNumHeadings : 1;
   auto& marks = search.marks;
-  marks.start(static_cast<size_t>(slots_) * grid_.num_cells());
+  marks.start(static_cast<size_t>(slots_) * grid_.num_cells() * states);
   auto& nodes = search.nodes;
   auto& open = search.open;
   const uint32_t seen = 2 * marks.stamp, closed = seen + 1;
-  auto key = [&](Cell v, int t) { return static_cast<uint32_t>(v) * static_cast<uint32_t>(slots_) + static_cast<uint32_t>(t); };
+  auto key = [&](Cell v, Heading hd, int t) {
+    const uint32_t state = rot ? static_cast<uint32_t>(v) * 4 + static_cast<uint32_t>(hd) : static_cast<uint32_t>(v);
+    return state * static_cast<uint32_t>(slots_) + static_cast<uint32_t>(t);
+  };
+  auto dist_of = [&](Cell v, Heading hd) { return rot ? row.at(v, hd) : row[v]; };
   nodes.clear();
   open.clear();
   auto worse = [](const OpenEntry& x, const OpenEntry& y) {
     if (x.f != y.f) return x.f > y.f;
     return x.t < y.t;  // deeper first
   };
-  nodes.push_back({0.f, static_cast<float>(row[at]), 0, at, -1});
+  const Heading h0 = rot ? world.pose(i).heading : kNoHeading;
+  nodes.push_back({0.f, static_cast<float>(dist_of(at, h0)), 0, at, -1, h0});
   open.push_back({nodes[0].f, 0, 0});
   int32_t best = 0;
   int expanded = 0;
@@ -343,7 +352,7 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
     const int32_t id = open.back().id;
     open.pop_back();
     const Node n = nodes[id];
-    Mark& mark = marks.find(key(n.v, n.t));
+    Mark& mark = marks.find(key(n.v, n.h, n.t));
     if (mark.tag == closed) continue;
     mark.tag = closed;
     // Done on the goal (the agent gets its next goal there): that path, even when a deeper node
@@ -357,26 +366,36 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
     if (n.t > nodes[best].t || (n.t == nodes[best].t && n.f < nodes[best].f)) best = id;
     // Done at the window's end (or out of expansions: the deepest cheapest node so far).
     if (n.t == W || ++expanded > cfg_.max_expansions) break;
-    auto expand = [&](Cell u) {
-      Mark& mk = marks.find(key(u, n.t + 1));
+    auto expand = [&](Cell u, Heading hd) {
+      Mark& mk = marks.find(key(u, hd, n.t + 1));
       if (mk.tag == closed) return;
-      const int h = row[u];
+      const int h = dist_of(u, hd);
       if (h >= kUnreachable) return;
       const float g = n.g + 1.f + collision_penalty(n.v, u, world.timestep + n.t, n.t);
       if (mk.tag == seen && mk.best_g <= g) return;  // reached as cheaply before
       mk.tag = seen;
       mk.best_g = g;
-      nodes.push_back({g, g + h, n.t + 1, u, id});
+      nodes.push_back({g, g + h, n.t + 1, u, id, hd});
       open.push_back({g + h, n.t + 1, static_cast<int32_t>(nodes.size() - 1)});
       std::push_heap(open.begin(), open.end(), worse);
     };
     // Neighbours in a random order, so equally good paths do not all bend the same way.
     Cell nb[4];
+    Heading nh[4];
     int m = 0;
-    for (Cell u : grid_.neighbours(n.v)) nb[m++] = u;
-    for (int a = m - 1; a > 0; --a) std::swap(nb[a], nb[rng() % (a + 1)]);
-    for (int a = 0; a < m; ++a) expand(nb[a]);
-    expand(n.v);
+    if (rot) {
+      if (const Cell u = forward_cell(grid_, n.v, n.h); u != kNoCell) nb[m] = u, nh[m++] = n.h;
+      nb[m] = n.v, nh[m++] = rotate_cw(n.h);
+      nb[m] = n.v, nh[m++] = rotate_ccw(n.h);
+    } else {
+      for (Cell u : grid_.neighbours(n.v)) nb[m] = u, nh[m++] = kNoHeading;
+    }
+    for (int a = m - 1; a > 0; --a) {
+      const int b = static_cast<int>(rng() % (a + 1));
+      std::swap(nb[a], nb[b]), std::swap(nh[a], nh[b]);
+    }
+    for (int a = 0; a < m; ++a) expand(nb[a], nh[a]);
+    expand(n.v, n.h);
   }
   counts.expansions += expanded;
   out.assign(nodes[best].t + 1, kNoCell);
@@ -387,6 +406,14 @@ Cell LocalGuidance::next_cell(int i, int now, Cell at) const {
   const auto& p = path_[i];
   if (p.size() < 2 || start_[i] != now || p[0] != at) return kNoCell;
   return p[1];
+}
+
+Cell LocalGuidance::next_move(int i, int now, Cell at) const {
+  const auto& p = path_[i];
+  if (p.size() < 2 || start_[i] != now || p[0] != at) return kNoCell;
+  for (size_t k = 1; k < p.size() && k <= static_cast<size_t>(kTurnLookahead); ++k)
+    if (p[k] != at) return p[k];
+  return at;
 }
 
 std::vector<Cell> LocalGuidance::path_from(int i, int now) const {

@@ -106,7 +106,8 @@ void MotionForecast::roll(const WorldView& world, const std::vector<Cell>& next,
     std::stable_sort(order_.begin(), order_.end(),
                      [&](int a, int b) { return pibt_->priority(a) > pibt_->priority(b); });
     guide_->update(view, order_);
-    for (int i : agents) preferred_[i] = guide_->next_cell(i, t, pos_[i]);
+    for (int i : agents)
+      preferred_[i] = world.rotation() ? guide_->next_move(i, t, pos_[i]) : guide_->next_cell(i, t, pos_[i]);
     pibt_->step(view, moves_, agents, fixed_moves_, &preferred_);
     for (int i : agents) pos_[i] = moves_[i], path_[i].push_back(moves_[i]);
     if (world.rotation())

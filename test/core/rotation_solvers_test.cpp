@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "gdrhcr/group_partition.hpp"
+#include "gdrhcr/local_guidance.hpp"
 #include "gdrhcr/pbs.hpp"
 #include "gdrhcr/sipp.hpp"
 #include "gdrhcr/validator.hpp"
@@ -105,4 +106,30 @@ TEST(RotationGroups, TurnsCountInTheVisibility) {
   EXPECT_EQ(part.groups().size(), 1u);
   part.compute(pos, 1);  // mapf: neighbours are always linked
   EXPECT_EQ(part.groups().size(), 1u);
+}
+
+TEST(RotationGuidance, PathsTurnInPlaceAndTheNextMoveLooksPastTheTurn) {
+  const Grid g = Grid::from_rows({"......", "......"});
+  DistTable dist(g, ActionModel::kRotation);
+  const std::vector<Cell> pos{g.cell(1, 0)};
+  const std::vector<std::vector<Cell>> goals{{g.cell(5, 0)}};
+  const std::vector<Heading> heads{kWest};
+  std::vector<Heading> next_heads(1, kNoHeading);
+  WorldView w{g, dist, 0, pos, goals};
+  w.action_model = ActionModel::kRotation;
+  w.headings = &heads;
+  w.next_headings = &next_heads;
+  LocalGuidanceConfig cfg;
+  cfg.window = 10;
+  LocalGuidance lg(g, 1, cfg);
+  lg.update(w, {0});
+  const auto path = lg.path_from(0, 0);
+  // Facing away: two turns in place, then four moves east (the mapf path would leave at once).
+  ASSERT_EQ(path.size(), 7u);
+  EXPECT_EQ(path[1], g.cell(1, 0));
+  EXPECT_EQ(path[2], g.cell(1, 0));
+  EXPECT_EQ(path[3], g.cell(2, 0));
+  EXPECT_EQ(path.back(), g.cell(5, 0));
+  EXPECT_EQ(lg.next_cell(0, 0, pos[0]), g.cell(1, 0));
+  EXPECT_EQ(lg.next_move(0, 0, pos[0]), g.cell(2, 0));
 }

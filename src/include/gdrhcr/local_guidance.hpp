@@ -98,6 +98,11 @@ class LocalGuidance {
 
   // Agent i's next guidance cell, or kNoCell when it has none for this step.
   Cell next_cell(int i, int now, Cell at) const;
+  // Rotation model: the first cell other than `at` on agent i's path within the next
+  // kTurnLookahead steps (a path that turns first stays in its cell while it turns), else `at`
+  // when the path waits, kNoCell without a path.
+  Cell next_move(int i, int now, Cell at) const;
+  static constexpr int kTurnLookahead = 3;
   // Agent i's guidance path from `now` on (empty when none).
   std::vector<Cell> path_from(int i, int now) const;
 
@@ -115,6 +120,7 @@ class LocalGuidance {
     int32_t t;
     Cell v;
     int32_t parent;
+    Heading h;  // rotation model; kNoHeading in mapf
   };
   struct OpenEntry {  // what the heap compares, kept inline for locality
     float f;
