@@ -137,7 +137,7 @@ r = json.load(open(sys.argv[1]))
 rotation = sys.argv[4] == "default"
 assert r["agents"] == 3 and r["tasks"]["kind"] == "lorr" and r["params"]["lookahead"] == 1, r
 assert r["action_model"] == ("rotation" if rotation else "mapf"), r["action_model"]
-assert r["params"].get("turns") == ("mapf-wait" if rotation else None), r["params"]
+assert r["params"].get("turns") == ("native" if rotation else None), r["params"]
 o = json.load(open(sys.argv[3]))
 assert o["actionModel"] == ("MAPF_T" if rotation else "MAPF") and o["teamSize"] == 3 and o["makespan"] == 40, o
 assert o["numTaskFinished"] == r["goals_reached"] > 0, (o["numTaskFinished"], r["goals_reached"])

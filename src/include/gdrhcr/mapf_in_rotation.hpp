@@ -4,9 +4,9 @@
 // actions, conservatively: an agent facing its next cell goes forward, one that does not turns
 // towards it and stays, and whoever planned to move into the cell of an agent that stays, stays
 // too (transitively), so the step stays free of vertex and edge conflicts. Planners replan from
-// the positions they are given every step, so the lag costs no validity. This is the fallback
-// for planners without native rotation planning (planner_supports), and what the LoRR adapter
-// (lorr_adapter/) ran first.
+// the positions they are given every step, so the lag costs no validity. The alternative to a
+// planner's native rotation planning (gdrhcr_sim --turns mapf-wait), and what the LoRR adapter
+// (lorr_adapter/) ran before the planners planned with turns.
 #pragma once
 
 #include <memory>
@@ -54,10 +54,10 @@ enum class TurnPlanning { kNative, kMapfWait };
 // "native" or "mapf-wait"; throws std::invalid_argument naming a bad value and the choices.
 TurnPlanning parse_turn_planning(const std::string& text);
 const char* turn_planning_name(TurnPlanning how);
-// LoRR runs (gdrhcr_sim --lorr-problem, the Start-Kit adapter) use mapf-wait: the Start-Kit
-// counts 2,128 errands of GD-RHCR that way on MR23-I-05 (400 agents, 1,000 steps, 100 ms per
-// step) against 853 natively (docs/results.md, "LoRR main round").
-constexpr TurnPlanning kLorrTurnPlanning = TurnPlanning::kMapfWait;
+// LoRR runs (gdrhcr_sim --lorr-problem, the Start-Kit adapter) plan natively: the Start-Kit
+// counts 2,755 errands of GD-RHCR that way on MR23-I-05 (400 agents, 1,000 steps, 100 ms per
+// step) against 2,147 with mapf-wait (docs/results.md, "LoRR main round").
+constexpr TurnPlanning kLorrTurnPlanning = TurnPlanning::kNative;
 
 // The planner `values` names, built to move in `model`: in rotation natively (make_planner) or,
 // with kMapfWait, its mapf self in MapfInRotation; in mapf `how` does not matter.
