@@ -305,6 +305,24 @@ void LocalGuidance::Marks::grow() {
   }
 }
 
+// The moves out of (v, h) other than a wait, in a random order, so equally good paths do not all
+// bend the same way: the free neighbours (mapf), or forward and the two quarter turns (rotation).
+int LocalGuidance::moves(Cell v, Heading h, bool rot, std::minstd_rand& rng, Cell* nb, Heading* nh) const {
+  int m = 0;
+  if (rot) {
+    if (const Cell u = forward_cell(grid_, v, h); u != kNoCell) nb[m] = u, nh[m++] = h;
+    nb[m] = v, nh[m++] = rotate_cw(h);
+    nb[m] = v, nh[m++] = rotate_ccw(h);
+  } else {
+    for (Cell u : grid_.neighbours(v)) nb[m] = u, nh[m++] = kNoHeading;
+  }
+  for (int a = m - 1; a > 0; --a) {
+    const int b = static_cast<int>(rng() % (a + 1));
+    std::swap(nb[a], nb[b]), std::swap(nh[a], nh[b]);
+  }
+  return m;
+}
+
 // Space-time A* over (t, cell), t = 0..W: cost 1 per step plus its collision penalty (meeting
 // other paths); heuristic the distance to the goal. In the rotation model over (t, cell,
 // heading): forward into the faced cell, a quarter turn or a wait, one step each (a turn pays as
@@ -379,21 +397,9 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
       open.push_back({g + h, n.t + 1, static_cast<int32_t>(nodes.size() - 1)});
       std::push_heap(open.begin(), open.end(), worse);
     };
-    // Neighbours in a random order, so equally good paths do not all bend the same way.
     Cell nb[4];
     Heading nh[4];
-    int m = 0;
-    if (rot) {
-      if (const Cell u = forward_cell(grid_, n.v, n.h); u != kNoCell) nb[m] = u, nh[m++] = n.h;
-      nb[m] = n.v, nh[m++] = rotate_cw(n.h);
-      nb[m] = n.v, nh[m++] = rotate_ccw(n.h);
-    } else {
-      for (Cell u : grid_.neighbours(n.v)) nb[m] = u, nh[m++] = kNoHeading;
-    }
-    for (int a = m - 1; a > 0; --a) {
-      const int b = static_cast<int>(rng() % (a + 1));
-      std::swap(nb[a], nb[b]), std::swap(nh[a], nh[b]);
-    }
+    const int m = moves(n.v, n.h, rot, rng, nb, nh);
     for (int a = 0; a < m; ++a) expand(nb[a], nh[a]);
     expand(n.v, n.h);
   }

@@ -168,6 +168,7 @@ class LocalGuidance {
   void update_banded(const WorldView& world, const std::vector<int>& agents,
                      std::chrono::steady_clock::time_point deadline);
   void plan(const WorldView& world, int i, Search& search, std::minstd_rand& rng, Counts& counts);
+  int moves(Cell v, Heading h, bool rot, std::minstd_rand& rng, Cell* nb, Heading* nh) const;
   // What a step from -> to at abs_t, `ahead` steps after the search's start, pays for meeting others.
   float collision_penalty(Cell from, Cell to, int abs_t, int ahead) const;
   int slot(int abs_t) const { return abs_t % slots_; }
