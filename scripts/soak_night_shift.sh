@@ -62,6 +62,13 @@ call() {
   echo "soak_night_shift: rosservice call $* failed for 30 s" >&2
   return 1
 }
+# An operator hold of 10 s: hold_fleet T WHAT SERVICE ON_ARGS OFF_ARGS (failed calls counted).
+hold_fleet() {
+  echo "soak_night_shift: $1 s: $2 for 10 s"
+  call "$3" "$4" || operator_errors=$((operator_errors + 1))
+  sleep 10
+  call "$3" "$5" || operator_errors=$((operator_errors + 1))
+}
 planner_pid() { pgrep -f "gd_rhcr_planner_node .*__name:=gd_rhcr_planner" | head -1; }
 
 # Wait for the first step of the fleet (the soak's clock starts there).
@@ -85,17 +92,11 @@ while kill -0 "$launch" 2>/dev/null; do
   fi
   if [ "$paused" = 0 ] && [ "$t" -ge "$pause_at" ]; then
     paused=1
-    echo "soak_night_shift: ${t} s: fleet paused for 10 s"
-    call /set_paused "{robot_id: -1, paused: true}" || operator_errors=$((operator_errors + 1))
-    sleep 10
-    call /set_paused "{robot_id: -1, paused: false}" || operator_errors=$((operator_errors + 1))
+    hold_fleet "$t" "fleet paused" /set_paused "{robot_id: -1, paused: true}" "{robot_id: -1, paused: false}"
   fi
   if [ "$stopped" = 0 ] && [ "$t" -ge "$stop_at" ]; then
     stopped=1
-    echo "soak_night_shift: ${t} s: emergency stop for 10 s"
-    call /emergency_stop "engage: true" || operator_errors=$((operator_errors + 1))
-    sleep 10
-    call /emergency_stop "engage: false" || operator_errors=$((operator_errors + 1))
+    hold_fleet "$t" "emergency stop" /emergency_stop "engage: true" "engage: false"
   fi
   sleep 2
 done
