@@ -79,8 +79,9 @@ FleetManager::FleetManager(const gdrhcr::Grid& grid, FleetConfig cfg, Log sink)
   live_.dispatcher = cfg_.dispatcher;
   live_.dispatch_switch_margin = cfg_.dispatch.switch_margin;
   live_.dispatch_finish_horizon = cfg_.dispatch.finish_horizon;
-  gdrhcr::Params resolved_copy = cfg_.planner_params;
-  const auto values = gdrhcr::PlannerParams::resolve(cfg_.planner, resolved_copy, gdrhcr::MapFacts(grid_, cfg_.num_robots));
+  gdrhcr::Params given = cfg_.planner_params;
+  const auto values = gdrhcr::PlannerParams::resolve(cfg_.planner, given, gdrhcr::MapFacts(grid_, cfg_.num_robots));
+  given.check_all_used("planner " + cfg_.planner);  // a parameter the planner lacks is an error naming it
   if (values.has("V")) live_.V = values.integer("V");
   if (values.has("H")) live_.H = values.integer("H");
   if (values.has("c-soft")) live_.c_soft = values.real("c-soft");
@@ -88,8 +89,7 @@ FleetManager::FleetManager(const gdrhcr::Grid& grid, FleetConfig cfg, Log sink)
   if (values.has("solver")) live_.solver = values.text("solver");
   base_params_ = cfg_.planner_params;
   for (const char* n : kLiveNames) base_params_.erase(n);
-  gdrhcr::Params given = cfg_.planner_params;  // make_planner rejects parameters the planner lacks
-  planner_ = make_deadline_planner(gdrhcr::make_planner(cfg_.planner, given, grid_, cfg_.num_robots, cfg_.seed));
+  planner_ = make_deadline_planner(gdrhcr::make_planner(values, grid_, cfg_.num_robots, cfg_.seed));
   fleet_ = std::make_unique<Fleet>(grid_, *dist_, cfg_.num_robots);
   fleet_->set_auto_assign(false);  // the dispatcher assigns
   ExecutorConfig ec;
