@@ -319,7 +319,13 @@ class FleetSim(object):
                     r.cmd = None  # keeps still
                     continue
                 r.cmd = target
+            slips = self.slips
             self.start_moves(now, e)
+            # A robot that has just slipped says so at once (where it is heading), as a driver
+            # would, not only at the next report period.
+            report = self.states(now) if self.slips != slips else None
+        if report:
+            self.publish_states(*report)
 
     def start_moves(self, now, e):
         """Robots at rest that can move (not delayed, stalled, offline, dead or absent) start their
@@ -393,44 +399,55 @@ class FleetSim(object):
 
     def on_timer(self, _event):
         now = rospy.get_time()
-        stamp = rospy.Time.now()
-        arr = RobotStateArray()
-        arr.header.stamp = stamp
-        arr.header.frame_id = self.frame
-        transforms = []
         with self.lock:
             self.advance(now)
             e = self.update_faults(now)
             if self.first_command is not None:
                 self.start_moves(now, e)  # a robot whose delay or stall is over makes its move now
-            for r in self.robots:
-                if self.dead(r.id, now) or r.id in self.absent:
-                    continue
-                s = RobotState()
-                s.id = r.id
-                s.x, s.y = r.cell
-                px, py = self.pose_of(r, now)
-                q = yaw_quaternion(r.yaw)
-                s.pose = Pose()
-                s.pose.position.x, s.pose.position.y = px, py
-                s.pose.orientation.x, s.pose.orientation.y, s.pose.orientation.z, s.pose.orientation.w = q
-                s.mode = RobotState.MODE_OFFLINE if self.offline(r.id, now) else r.mode
-                s.task_id = r.task_id
-                s.moving = r.moving
-                r.reported = (r.cell, r.moving)
-                arr.robots.append(s)
-                if self.tf_pub:
-                    t = TransformStamped()
-                    t.header.stamp = stamp
-                    t.header.frame_id = self.frame
-                    t.child_frame_id = "%srobot_%d/base_link" % (self.tf_prefix, r.id)
-                    t.transform.translation.x, t.transform.translation.y = px, py
-                    (t.transform.rotation.x, t.transform.rotation.y,
-                     t.transform.rotation.z, t.transform.rotation.w) = q
-                    transforms.append(t)
+            arr, transforms = self.states(now)
+        self.publish_states(arr, transforms)
+
+    def publish_states(self, arr, transforms):
         self.state_pub.publish(arr)
         if transforms:
             self.tf_pub.sendTransform(transforms)
+
+    def states(self, now):
+        """Every reporting robot's state (and tf) at `now`; call with the lock held."""
+        stamp = rospy.Time.now()
+        arr = RobotStateArray()
+        arr.header.stamp = stamp
+        arr.header.frame_id = self.frame
+        transforms = []
+        for r in self.robots:
+            if self.dead(r.id, now) or r.id in self.absent:
+                continue
+            s = RobotState()
+            s.id = r.id
+            s.x, s.y = r.cell
+            px, py = self.pose_of(r, now)
+            q = yaw_quaternion(r.yaw)
+            s.pose = Pose()
+            s.pose.position.x, s.pose.position.y = px, py
+            s.pose.orientation.x, s.pose.orientation.y, s.pose.orientation.z, s.pose.orientation.w = q
+            s.mode = RobotState.MODE_OFFLINE if self.offline(r.id, now) else r.mode
+            s.task_id = r.task_id
+            s.moving = r.moving
+            if r.moving:  # the cell it is entering, as a driver knows it (also when it slips)
+                s.entering_known = True
+                s.entering_x, s.entering_y = r.dst
+            r.reported = (r.cell, r.moving)
+            arr.robots.append(s)
+            if self.tf_pub:
+                t = TransformStamped()
+                t.header.stamp = stamp
+                t.header.frame_id = self.frame
+                t.child_frame_id = "%srobot_%d/base_link" % (self.tf_prefix, r.id)
+                t.transform.translation.x, t.transform.translation.y = px, py
+                (t.transform.rotation.x, t.transform.rotation.y,
+                 t.transform.rotation.z, t.transform.rotation.w) = q
+                transforms.append(t)
+        return arr, transforms
 
     def on_diagnostics(self, _event):
         now = rospy.get_time()

@@ -106,7 +106,8 @@ bool Executor::place(int r, const RobotRecord& rec, TickOutput& out) {
   t.reported_moving = rec.moving;
   t.active = true;
   t.cell = x;
-  t.unknown_move = rec.moving;
+  t.unknown_move = rec.moving && rec.entering == kNoCell;  // known: only that cell is blocked
+  if (rec.moving) t.claimed = rec.entering;
   t.health = rec.moving ? RobotHealth::kInconsistent : rec.reported_offline ? RobotHealth::kOffline : RobotHealth::kOk;
   if (rec.moving) out.warnings.push_back(who(r) + " first reports while moving: an obstacle until it stops");
   if (agent_of_robot_[r] < 0) {  // its planner agent index, for good
@@ -136,7 +137,7 @@ bool Executor::take_report(int r, const std::vector<RobotRecord>& robots, TickOu
   bool need_resync = false;
   RobotHealth h = rec.reported_offline ? RobotHealth::kOffline : RobotHealth::kOk;
   if (x == t.cell) {
-    t.claimed = kNoCell;
+    if (!rec.moving || rec.entering != t.claimed) t.claimed = kNoCell;
     if (t.dispatched && rec.reported_offline && !rec.moving) {  // OFFLINE at rest: it will not make the move
       t.dispatched = false;
       t.path.clear();
@@ -149,7 +150,11 @@ bool Executor::take_report(int r, const std::vector<RobotRecord>& robots, TickOu
   } else {
     h = RobotHealth::kInconsistent;
   }
-  const bool unknown = rec.moving && !t.dispatched;
+  if (x == t.cell && rec.moving && rec.entering != kNoCell && !(t.dispatched && rec.entering == t.path.front())) {
+    need_resync |= take_entering(r, rec.entering, robots, out);
+    h = RobotHealth::kInconsistent;
+  }
+  const bool unknown = rec.moving && !t.dispatched && rec.entering == kNoCell;
   if (unknown && !t.unknown_move)
     out.warnings.push_back(who(r) + " is moving without a command: an obstacle around " + grid_.describe(t.cell));
   if (unknown != t.unknown_move) need_resync = true;
@@ -190,6 +195,29 @@ bool Executor::take_unexpected_cell(int r, Cell x, const std::vector<RobotRecord
                            ": an obstacle at " + grid_.describe(t.cell) + " and " + grid_.describe(x));
   t.claimed = x;
   return false;
+}
+
+// Robot r, still in its cell, reports moving into x, a neighbour it was not commanded into (a slip
+// under way): it is an obstacle at its cell and at x (claimed) until it reports where it ended, so
+// nobody is sent into x meanwhile. A robot commanded into x that has not left its own cell has that
+// move taken back (true: the commitments need a resync).
+bool Executor::take_entering(int r, Cell x, const std::vector<RobotRecord>& robots, TickOutput& out) {
+  Track& t = tracks_[r];
+  if (t.claimed == x) return false;
+  bool withdrawn = false;
+  int other = holder_of(x, r);
+  if (other >= 0 && withdraw_move(other, x, r, robots)) {
+    out.warnings.push_back(who(other) + "'s move into " + grid_.describe(x) + " is taken back: " + who(r) +
+                           " is moving into it");
+    withdrawn = true;
+    other = -1;
+  }
+  out.warnings.push_back(who(r) + " is moving into " + grid_.describe(x) + ", not the cell it was commanded (" +
+                         grid_.describe(t.dispatched ? t.path.front() : t.cell) + ")" +
+                         (other >= 0 ? ", which robot " + std::to_string(other) + " holds" : std::string()) +
+                         ": an obstacle at both cells until it stops");
+  t.claimed = x;
+  return withdrawn;
 }
 
 // Robot q was commanded into x but reports at rest in its own cell, which it has not left, and no
@@ -249,7 +277,9 @@ std::vector<Cell> Executor::unaccounted_cells(const std::vector<RobotRecord>& ro
     if (!rec.reported || rec.silent || rec.cell == kNoCell) continue;
     const bool known = t.active && (rec.cell == t.cell || (t.dispatched && rec.cell == t.path.front()));
     if (!known) cells.push_back(rec.cell);
-    if (rec.moving && !(t.active && t.dispatched)) {
+    if (rec.moving && rec.entering != kNoCell) {
+      if (!(t.active && t.dispatched && rec.entering == t.path.front())) cells.push_back(rec.entering);
+    } else if (rec.moving && !(t.active && t.dispatched)) {
       for (Cell nb : grid_.neighbours(rec.cell)) cells.push_back(nb);
     }
   }

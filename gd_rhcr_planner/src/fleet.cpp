@@ -91,7 +91,7 @@ bool Fleet::cancel(uint64_t id, std::string& reason) {
 }
 
 bool Fleet::update_robot(int64_t id, int x, int y, bool offline, bool moving, std::string& error,
-                         double now) {
+                         double now, std::optional<std::pair<int, int>> entering) {
   if (id < 0 || id >= num_robots()) {
     error = "unknown robot id " + std::to_string(id) + " (fleet has " + std::to_string(num_robots()) + " robots)";
     return false;
@@ -101,7 +101,20 @@ bool Fleet::update_robot(int64_t id, int x, int y, bool offline, bool moving, st
     error = "robot " + std::to_string(id) + ": " + error;
     return false;
   }
+  Cell next = gdrhcr::kNoCell;
+  if (moving && entering) {
+    if (!validate_cell(entering->first, entering->second, "entering cell", next, error)) {
+      error = "robot " + std::to_string(id) + ": " + error;
+      return false;
+    }
+    if (!grid_.step_allowed(c, next) || next == c) {
+      error = "robot " + std::to_string(id) + ": entering cell " + grid_.describe(next) + " is not next to its cell " +
+              grid_.describe(c);
+      return false;
+    }
+  }
   RobotRecord& r = robots_[id];
+  r.entering = next;
   r.reported = true;
   r.cell = c;
   r.reported_offline = offline;

@@ -114,6 +114,12 @@ FleetManager::FleetManager(const gdrhcr::Grid& grid, FleetConfig cfg, Log sink)
 
 FleetManager::~FleetManager() = default;
 
+size_t FleetManager::prepare_distances(const std::vector<Cell>& cells) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  dist_->prefetch(cells);
+  return dist_->cached_rows();
+}
+
 std::unique_ptr<DeadlinePlanner> FleetManager::make_deadline_planner(std::unique_ptr<gdrhcr::Planner> primary) const {
   gdrhcr::Params none;
   return std::make_unique<DeadlinePlanner>(std::move(primary),
@@ -165,7 +171,9 @@ int FleetManager::update_robots(const std::vector<RobotReport>& reports, double 
     else if (r.mode > kModeStopped) why = "robot " + std::to_string(r.id) + ": unknown mode " + std::to_string(r.mode);
     else if (known && r.stamp > 0 && r.stamp < last_stamp_[r.id])
       why = "robot " + std::to_string(r.id) + ": stamped before its last report (out of order)";
-    else if (fleet_->update_robot(r.id, r.x, r.y, r.mode == kOffline, r.moving, why, now)) {
+    else if (fleet_->update_robot(r.id, r.x, r.y, r.mode == kOffline, r.moving, why, now,
+                                  r.entering_known ? std::make_optional(std::make_pair(r.entering_x, r.entering_y))
+                                                   : std::nullopt)) {
       if (r.stamp > 0) last_stamp_[r.id] = r.stamp;
       continue;
     }

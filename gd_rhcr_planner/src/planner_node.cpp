@@ -169,6 +169,12 @@ void PlannerNode::init() {
            map_path_.c_str(), map_->format.c_str(), grid.width(), grid.height(), grid.free_cells().size(),
            map_->frame.resolution, cfg.planner.c_str(), fleet_->planner_config_string().c_str(), cfg.num_robots,
            cfg.tick_rate);
+  std::vector<gdrhcr::Cell> stations = mapd.pickups;
+  stations.insert(stations.end(), mapd.deliveries.begin(), mapd.deliveries.end());
+  const double t0 = ros::WallTime::now().toSec();
+  const size_t rows = fleet_->prepare_distances(stations);
+  ROS_INFO("distances to the %zu pickup and delivery cells computed in %.2f s (%zu rows cached)", stations.size(),
+           ros::WallTime::now().toSec() - t0, rows);
   MarkerStyle style;
   style.frame_id = frame_id_;
   style.label_limit = label_limit_;

@@ -40,6 +40,7 @@ std::vector<RobotReport> robot_reports(const gd_rhcr_msgs::RobotStateArray& msg)
     const auto& p = s.pose;
     RobotReport r;
     r.id = s.id, r.x = s.x, r.y = s.y, r.mode = s.mode, r.moving = s.moving, r.stamp = stamp;
+    r.entering_known = s.entering_known, r.entering_x = s.entering_x, r.entering_y = s.entering_y;
     r.pose_finite = std::isfinite(p.position.x) && std::isfinite(p.position.y) && std::isfinite(p.position.z) &&
                     std::isfinite(p.orientation.x) && std::isfinite(p.orientation.y) &&
                     std::isfinite(p.orientation.z) && std::isfinite(p.orientation.w);

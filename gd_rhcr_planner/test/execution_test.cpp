@@ -601,6 +601,71 @@ TEST(ExecutorAdg, NoDispatchBetweenTicksIntoACellARobotReportsBeingIn) {
   EXPECT_EQ(ex.check_invariants(), "");
 }
 
+// Issue 25 (the one-hour night shift's collision): robot 0, commanded into (2,0), slips towards
+// (1,1) and says so (RobotRecord::entering) while still in (1,0). From that report on, nobody is
+// sent into (1,1): robot 1's planned move there becomes a wait and robot 0 gets no command until it
+// stops. Once it reports (1,1) at rest, it is believed and planned from there. (Before, the cell a
+// slipping robot entered was free for everybody until it arrived, and robot 1 was sent into it.)
+TEST(ExecutorAdg, ACellARobotReportsSlippingIntoIsKeptClearAtOnce) {
+  const Grid g = Grid::from_rows({"......", "......"});
+  gdrhcr::DistTable dist(g);
+  FnPlanner* fn;
+  auto planner = make_fn_planner(g, 2, &fn);
+  Executor ex(g, dist, 2, ExecutorConfig{});
+  std::vector<RobotRecord> robots{at(g, 1, 0), at(g, 2, 1)};
+  int step = 0;
+  fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
+    if (step++ == 0) next[0] = g.cell(2, 0);
+    else if (w.positions[1] == g.cell(2, 1)) next[1] = g.cell(1, 1);  // unaware of the slip
+  };
+  auto out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.command[0], g.cell(2, 0));
+  robots[0] = at(g, 1, 0, true);
+  robots[0].entering = g.cell(1, 1);
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.health[0], RobotHealth::kInconsistent);
+  EXPECT_NE(out.command[1], g.cell(1, 1)) << "robot 1 is sent into the cell robot 0 is slipping into";
+  EXPECT_EQ(out.command[0], kNoCell) << "a robot moving where it was not sent gets no command until it stops";
+  EXPECT_EQ(ex.check_invariants(), "");
+  out = ex.tick(robots, stay_goals(robots), *planner, false);  // still under way: still kept clear
+  EXPECT_NE(out.command[1], g.cell(1, 1));
+  robots[0] = at(g, 1, 1);
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.health[0], RobotHealth::kOk);
+  EXPECT_EQ(ex.cell(0), g.cell(1, 1));
+  EXPECT_NE(out.command[1], g.cell(1, 1));
+  EXPECT_EQ(ex.check_invariants(), "");
+}
+
+// Issue 25: between ticks, robot 2 leaves (2,1) and robot 1, queued behind it, would be sent in;
+// in the same report robot 0 (commanded into (3,0)) says it is slipping into (2,1). Nobody is sent
+// into a cell a robot reports entering: robot 1 waits, and the next tick takes robot 0's slip.
+TEST(ExecutorAdg, NoDispatchBetweenTicksIntoACellARobotReportsSlippingInto) {
+  const Grid g = Grid::from_rows({"......", "......"});
+  gdrhcr::DistTable dist(g);
+  FnPlanner* fn;
+  auto planner = make_fn_planner(g, 3, &fn);
+  Executor ex(g, dist, 3, ExecutorConfig{});
+  std::vector<RobotRecord> robots{at(g, 2, 0), at(g, 1, 1), at(g, 2, 1)};
+  int step = 0;
+  fn->fn = [&](const gdrhcr::WorldView&, std::vector<Cell>& next) {
+    if (step++ == 0) next[0] = g.cell(3, 0), next[1] = g.cell(2, 1), next[2] = g.cell(3, 1);
+  };
+  auto out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.command[0], g.cell(3, 0));
+  EXPECT_EQ(out.command[2], g.cell(3, 1));
+  EXPECT_EQ(out.waiting, 1);
+  robots[2] = at(g, 3, 1);  // arrived
+  robots[0] = at(g, 2, 0, true);
+  robots[0].entering = g.cell(2, 1);  // slipping into the cell robot 2 left
+  EXPECT_TRUE(ex.advance(robots).empty());
+  EXPECT_EQ(ex.command(1), g.cell(1, 1));
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.health[0], RobotHealth::kInconsistent);
+  EXPECT_EQ(out.command[1], g.cell(1, 1));
+  EXPECT_EQ(ex.check_invariants(), "");
+}
+
 namespace {
 
 // Robot i, at rest and not delayed, slips into a neighbour no robot is in or entering: one another

@@ -51,6 +51,26 @@ TEST(Fleet, UnknownRobotAndBadCellAreIgnored) {
   EXPECT_EQ(f.position_conflict(), "");
 }
 
+// Issue 25: the cell a moving robot reports entering is checked like its cell: on the map, free,
+// and one move from where it is; otherwise the report is ignored with the reason.
+TEST(Fleet, TheCellARobotReportsEnteringIsChecked) {
+  Grid g = corridor();
+  gdrhcr::DistTable d(g);
+  Fleet f(g, d, 2);
+  std::string err;
+  EXPECT_FALSE(f.update_robot(0, 0, 0, false, true, err, 1.0, std::make_pair(-1, 0)));
+  EXPECT_NE(err.find("entering cell (-1,0) is off the map"), std::string::npos) << err;
+  EXPECT_FALSE(f.update_robot(0, 0, 0, false, true, err, 1.0, std::make_pair(2, 0)));
+  EXPECT_NE(err.find("is not next to its cell"), std::string::npos) << err;
+  EXPECT_FALSE(f.update_robot(0, 0, 0, false, true, err, 1.0, std::make_pair(0, 0)));
+  EXPECT_NE(err.find("is not next to its cell"), std::string::npos) << err;
+  EXPECT_FALSE(f.robot(0).reported) << "a rejected report is not taken";
+  ASSERT_TRUE(f.update_robot(0, 0, 0, false, true, err, 1.0, std::make_pair(1, 0))) << err;
+  EXPECT_EQ(f.robot(0).entering, g.cell(1, 0));
+  ASSERT_TRUE(f.update_robot(0, 1, 0, false, false, err, 2.0, std::make_pair(2, 0))) << err;
+  EXPECT_EQ(f.robot(0).entering, gdrhcr::kNoCell) << "a robot at rest enters nothing";
+}
+
 TEST(Fleet, NearestIdleRobotAndLifecycle) {
   Grid g = corridor();
   gdrhcr::DistTable d(g);

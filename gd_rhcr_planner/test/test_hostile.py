@@ -192,6 +192,11 @@ class Hostile(unittest.TestCase):
         self.ignored_reason("out of order")
         self.states([self.robot(5, *self.w.get("cells")[5], mode=77)])
         self.ignored_reason("unknown mode")
+        x6, y6 = self.w.get("cells")[6]
+        self.states([self.robot(6, x6, y6, moving=True, entering_known=True, entering_x=x6 + 2, entering_y=y6)])
+        self.ignored_reason("is not next to its cell")
+        self.states([self.robot(6, x6, y6, moving=True, entering_known=True, entering_x=-5, entering_y=y6)])
+        self.ignored_reason("entering cell (-5,%d) is off the map" % y6)
         self.states([self.robot(1000 + i, 1, 1) for i in range(100000)])
         self.ignored_reason("unknown robot id 100999")
         self.assert_ticking()
@@ -244,7 +249,7 @@ class Hostile(unittest.TestCase):
         """A report that must be ignored: unknown ids freely, real ids only with a fault."""
         rid = self.rng.randrange(self.n)
         x, y = cells.get(rid, (0, 0))
-        fault = self.rng.randrange(5)
+        fault = self.rng.randrange(6)
         if fault == 0:
             return [self.robot(self.rng.randint(self.n, 2 ** 32 - 1), *self.random_cell())]
         if fault == 1:
@@ -254,6 +259,10 @@ class Hostile(unittest.TestCase):
             setattr(r.pose.position, self.rng.choice("xyz"), self.rng.choice([float("nan"), float("inf"), -float("inf")]))
         elif fault == 3:
             r.x, r.y = self.rng.choice(self.walls) if self.rng.random() < 0.5 else (self.width + 1, -1)
+        elif fault == 4:  # moving into a cell that is not next to it, or off the map
+            r.moving, r.entering_known = True, True
+            r.entering_x, r.entering_y = self.rng.choice([(x + 2, y), (x, y - 2), self.rng.choice(self.walls),
+                                                          (self.width + 1, -1), (x, y)])
         else:
             r.mode = self.rng.randint(6, 255)
         return [r]

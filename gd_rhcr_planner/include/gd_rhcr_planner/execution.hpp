@@ -23,7 +23,9 @@
 // commitments are then rebuilt (a "resync"), so nobody waits for a robot that will not move. An
 // inconsistent robot is told to stay where it reports, and is believed once its report fits (a free
 // neighbour). A slip (a report of a free neighbour) is believed, also into a cell another robot was
-// sent into but has not left its own cell for: that robot's move is taken back.
+// sent into but has not left its own cell for: that robot's move is taken back. A robot that reports
+// the cell it is entering (RobotRecord::entering) is caught while it slips: the cell it enters is
+// kept clear from that report on, not only once it has arrived.
 //
 // The planner's agents are the placed robots, each under one agent index for the executor's
 // lifetime, given when the robot is first placed (in robot id order: the identity when every
@@ -147,6 +149,7 @@ class Executor {
   bool fall_silent(int r, TickOutput& out);
   bool take_report(int r, const std::vector<RobotRecord>& robots, TickOutput& out);
   bool take_unexpected_cell(int r, Cell x, const std::vector<RobotRecord>& robots, TickOutput& out);
+  bool take_entering(int r, Cell x, const std::vector<RobotRecord>& robots, TickOutput& out);
   bool withdraw_move(int q, Cell x, int r, const std::vector<RobotRecord>& robots);
   bool set_health(int r, RobotHealth h, TickOutput& out);
   void resync();

@@ -7,7 +7,9 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gdrhcr/dist_table.hpp"
@@ -53,6 +55,7 @@ struct RobotRecord {
   bool reported_offline = false;  // the robot's own report (mode OFFLINE)
   bool silent = false;            // no report for longer than the offline timeout
   bool moving = false;
+  Cell entering = gdrhcr::kNoCell;  // while moving: the cell it reports entering (kNoCell: not known)
   double last_report = 0;         // time of the last accepted report (caller's clock, s)
   int64_t task = -1;
 };
@@ -70,8 +73,10 @@ class Fleet {
   // A robot's report at time `now` (seconds, any clock the caller also passes to mark_silent).
   // Returns false with `error` set for an unknown id or a cell that is off the map or blocked;
   // the report is then ignored. A report brings a silent robot back.
+  // `entering` (optional, while moving): the cell the robot reports entering; it must be a free
+  // neighbour of (x, y).
   bool update_robot(int64_t id, int x, int y, bool offline, bool moving, std::string& error,
-                    double now = 0);
+                    double now = 0, std::optional<std::pair<int, int>> entering = std::nullopt);
   // Robots that have reported before but not within `timeout` seconds of `now` become silent:
   // offline (an obstacle at their last cell) until they report again; advance() then requeues
   // their tasks. Returns the robots that became silent in this call.

@@ -80,6 +80,8 @@ struct RobotReport {
   int x = 0, y = 0;
   uint8_t mode = 0;          // RobotState.MODE_*; MODE_OFFLINE takes the robot out
   bool moving = false;
+  bool entering_known = false;  // moving into (entering_x, entering_y)
+  int entering_x = 0, entering_y = 0;
   double stamp = 0;          // the message's stamp (s); 0 = unstamped, not checked for order
   bool pose_finite = true;   // every pose field is a finite number
 };
@@ -127,6 +129,10 @@ class FleetManager {
   // gdrhcr::MapError naming what is wrong.
   FleetManager(const gdrhcr::Grid& grid, FleetConfig cfg, Log sink = {});
   ~FleetManager();
+  // Computes the distance rows of `cells` now (the map's pickup and delivery cells: the goals
+  // tasks will name), in parallel, so the table does not grow while the fleet runs. Returns the
+  // rows cached.
+  size_t prepare_distances(const std::vector<Cell>& cells);
 
   // --- inputs (any thread) ---
   // Robots' reports of one message, received at `now` (the caller's clock, s). A report is
