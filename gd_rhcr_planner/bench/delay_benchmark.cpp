@@ -17,7 +17,9 @@
 // --late N: robots 0..N-1 are off the floor (they never reported) until --join-tick; then they
 // report, at their cell if it is free, else at a free one (a robot joining the fleet late).
 // Each robot's goals come from its own random stream, so both runs of a seed give every robot
-// the same goal sequence. DELAY_BENCH_STATS=1 prints the planner's counters after each run.
+// the same goal sequence. DELAY_BENCH_STATS=1 prints the planner's counters after each run;
+// DELAY_BENCH_WHY=1 where the robots' time goes (moving, delayed, waiting behind a delayed robot or
+// another, kept in place by the planner), robots per substep.
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -43,12 +45,64 @@ struct Options {
   std::vector<std::pair<std::string, std::string>> params;  // --param key=value, for the planner
 };
 
+// Where robot-time goes (DELAY_BENCH_WHY=1), robots per substep (sampled after substeps 1-9 of
+// each tick, where dispatch on arrival runs): moving, delayed, dispatched and about to start,
+// waiting on a committed move behind a delayed robot (directly or through robots waiting
+// themselves), waiting behind a robot that is not delayed, and with no move committed (the
+// planner keeps it in place; of those, how many are next to a delayed robot).
+enum Why { kMoving, kDelayed, kStarting, kBehindLate, kBehindOther, kPlannedWait, kWaitNextToLate, kWhyCount };
+const char* const kWhyName[kWhyCount] = {"moving", "delayed", "starting", "behind-late", "behind-other",
+                                         "planned-wait", "(of which next to a delayed robot)"};
+
 struct Result {
+  double why[kWhyCount] = {};
+  long why_samples = 0;
   int goals = 0;
   double delayed = 0, waiting = 0, held = 0, moves = 0;  // per tick
   long revoked = 0;
   std::string error;
 };
+
+// True when robot r waits for its committed move behind a delayed robot, directly or through
+// robots that wait themselves.
+bool behind_delayed(const Executor& ex, DelayedFleet& fleet, int r) {
+  for (int depth = 0; depth < 64; ++depth) {
+    const std::vector<Cell> path = ex.committed(r);
+    if (path.empty() || ex.dispatched(r)) return false;
+    const std::vector<int> q = ex.visitors(path.front());
+    if (q.empty() || q.front() == r) return false;
+    r = q.front();
+    const SimRobot& s = fleet.robots()[r];
+    if (s.delay > 0) return true;
+    if (s.moving) return false;
+  }
+  return false;
+}
+
+void account(const Executor& ex, DelayedFleet& fleet, const gdrhcr::Grid& g, Result& res) {
+  const auto& rs = fleet.robots();
+  std::vector<uint8_t> late(g.num_cells(), 0);
+  for (const SimRobot& s : rs)
+    if (s.delay > 0) late[s.cell] = 1;
+  for (int r = 0; r < static_cast<int>(rs.size()); ++r) {
+    const SimRobot& s = rs[r];
+    Why w;
+    if (s.delay > 0) w = kDelayed;
+    else if (s.moving) w = kMoving;
+    else if (ex.dispatched(r)) w = kStarting;
+    else if (!ex.committed(r).empty()) w = behind_delayed(ex, fleet, r) ? kBehindLate : kBehindOther;
+    else {
+      w = kPlannedWait;
+      for (Cell nb : g.neighbours(s.cell))
+        if (late[nb]) {
+          res.why[kWaitNextToLate] += 1;
+          break;
+        }
+    }
+    res.why[w] += 1;
+  }
+  ++res.why_samples;
+}
 
 Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t seed) {
   gdrhcr::DistTable dist(g);
@@ -67,6 +121,18 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
   for (int i = 0; i < o.late; ++i) fleet.robots()[i].missing = true;
   fleet.ticks_per_step = o.step_ticks;
   Result r;
+  const bool why = std::getenv("DELAY_BENCH_WHY") != nullptr;
+  DelayedFleet::Between between;
+  if (o.between) between = DelayedFleet::on_arrival(ex);
+  if (why) {
+    DelayedFleet::Between inner = between;
+    between = [&, inner](const std::vector<RobotRecord>& reports) {
+      std::vector<std::pair<int, Cell>> cmds;
+      if (inner) cmds = inner(reports);
+      account(ex, fleet, g, r);
+      return cmds;
+    };
+  }
   for (int t = 0; t < o.ticks; ++t) {
     if (t == o.join_tick)
       for (int i = 0; i < o.late; ++i) fleet.join(i);
@@ -76,7 +142,7 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
     else if (!out.plan_error.empty()) r.error = "plan rejected: " + out.plan_error;
     else r.error = ex.check_invariants();
     if (r.error.empty())
-      r.error = fleet.execute(out, p_delay, o.max_delay, o.between ? DelayedFleet::on_arrival(ex) : nullptr);
+      r.error = fleet.execute(out, p_delay, o.max_delay, between);
     if (!r.error.empty()) {
       r.error = "tick " + std::to_string(t) + ": " + r.error;
       return r;
@@ -90,6 +156,11 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
   planner.wait_idle();
   if (std::getenv("DELAY_BENCH_STATS"))
     std::fprintf(stderr, "p %.3f: revoked %ld; %s\n", p_delay, r.revoked, planner.primary().stats().dump().c_str());
+  if (why) {
+    std::fprintf(stderr, "p %g, robots per substep:", p_delay);
+    for (int w = 0; w < kWhyCount; ++w) std::fprintf(stderr, " %s %.1f", kWhyName[w], r.why[w] / r.why_samples);
+    std::fprintf(stderr, "\n");
+  }
   r.delayed /= o.ticks;
   r.waiting /= o.ticks;
   r.held /= o.ticks;

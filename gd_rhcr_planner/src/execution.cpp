@@ -632,6 +632,11 @@ std::string Executor::debug_queue(Cell c) const {
   return s;
 }
 
+std::vector<int> Executor::visitors(Cell c) const {
+  auto it = visits_.find(c);
+  return it == visits_.end() ? std::vector<int>{} : std::vector<int>(it->second.begin(), it->second.end());
+}
+
 std::string Executor::check_invariants() const {
   std::string err;
   for (int r = 0; r < num_robots() && err.empty(); ++r) {

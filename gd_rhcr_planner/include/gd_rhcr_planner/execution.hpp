@@ -129,6 +129,8 @@ class Executor {
   std::string check_invariants() const;
   // The robots queued to visit cell c, with their state (debugging, tests).
   std::string debug_queue(Cell c) const;
+  // The robots queued to visit cell c, in order (the first is in it or enters it next).
+  std::vector<int> visitors(Cell c) const;
 
  private:
   struct Track {
