@@ -50,9 +50,15 @@ struct Options {
 // waiting on a committed move behind a delayed robot (directly or through robots waiting
 // themselves), waiting behind a robot that is not delayed, and with no move committed (the
 // planner keeps it in place; of those, how many are next to a delayed robot).
-enum Why { kMoving, kDelayed, kStarting, kBehindLate, kBehindOther, kPlannedWait, kWaitNextToLate, kWhyCount };
-const char* const kWhyName[kWhyCount] = {"moving", "delayed", "starting", "behind-late", "behind-other",
-                                         "planned-wait", "(of which next to a delayed robot)"};
+enum Why {
+  kMoving, kDelayed, kStarting, kBehindLate, kBehindOther, kPlannedWait, kWaitNextToLate,
+  kLateIn, kLateSent, kLateStarted, kLateQueued, kWhyCount
+};
+const char* const kWhyName[kWhyCount] = {
+    "moving", "delayed", "starting", "behind-late", "behind-other", "planned-wait",
+    "(of which next to a delayed robot)", "behind-late: it stands in the cell", "behind-late: sent into the cell, at rest",
+    "behind-late: sent into the cell, stopped on the way",
+    "behind-late: its later visit queued first"};
 
 struct Result {
   double why[kWhyCount] = {};
@@ -63,22 +69,30 @@ struct Result {
   std::string error;
 };
 
-// True when robot r waits for its committed move behind a delayed robot, directly or through
-// robots that wait themselves.
-bool behind_delayed(const Executor& ex, DelayedFleet& fleet, int r) {
+// Why robot r waits for its committed move, when a delayed robot is the cause, directly or
+// through robots that wait themselves: the delayed robot is in the cell the last robot of the
+// chain waits for (kLateIn), was sent into it and has not started (kLateSent) or stopped on the
+// way (kLateStarted), or is queued to visit it first (kLateQueued); kBehindOther otherwise.
+Why behind_delayed(const Executor& ex, DelayedFleet& fleet, int r) {
   for (int depth = 0; depth < 64; ++depth) {
     const std::vector<Cell> path = ex.committed(r);
-    if (path.empty() || ex.dispatched(r)) return false;
+    if (path.empty() || ex.dispatched(r)) return kBehindOther;
     const std::vector<int> q = ex.visitors(path.front());
-    if (q.empty() || q.front() == r) return false;
-    r = q.front();
-    const SimRobot& s = fleet.robots()[r];
-    if (s.delay > 0) return true;
-    if (s.moving) return false;
+    if (q.empty() || q.front() == r) return kBehindOther;
+    const int ahead = q.front();
+    const SimRobot& s = fleet.robots()[ahead];
+    if (s.delay > 0) {
+      if (ex.cell(ahead) == path.front()) return kLateIn;
+      if (!ex.dispatched(ahead) || ex.committed(ahead).front() != path.front()) return kLateQueued;
+      return s.moving ? kLateStarted : kLateSent;
+    }
+    if (s.moving) return kBehindOther;
+    r = ahead;
   }
-  return false;
+  return kBehindOther;
 }
 
+// Adds where each robot's time goes now (after a substep) to res.why.
 void account(const Executor& ex, DelayedFleet& fleet, const gdrhcr::Grid& g, Result& res) {
   const auto& rs = fleet.robots();
   std::vector<uint8_t> late(g.num_cells(), 0);
@@ -90,8 +104,13 @@ void account(const Executor& ex, DelayedFleet& fleet, const gdrhcr::Grid& g, Res
     if (s.delay > 0) w = kDelayed;
     else if (s.moving) w = kMoving;
     else if (ex.dispatched(r)) w = kStarting;
-    else if (!ex.committed(r).empty()) w = behind_delayed(ex, fleet, r) ? kBehindLate : kBehindOther;
-    else {
+    else if (!ex.committed(r).empty()) {
+      w = behind_delayed(ex, fleet, r);
+      if (w != kBehindOther) {
+        res.why[w] += 1;
+        w = kBehindLate;
+      }
+    } else {
       w = kPlannedWait;
       for (Cell nb : g.neighbours(s.cell))
         if (late[nb]) {
