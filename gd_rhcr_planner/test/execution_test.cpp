@@ -115,6 +115,7 @@ TEST(ExecutorAdg, ACellIsEnteredOnlyAfterTheRobotsBeforeHaveLeftIt) {
   EXPECT_EQ(out.command[0], g.cell(1, 0));
   EXPECT_EQ(out.command[1], g.cell(3, 0));
   EXPECT_EQ(out.waiting, 1);
+  EXPECT_EQ(ex.visitors(g.cell(2, 0)), (std::vector<int>{0, 1})) << "robot 0 is in (2,0), robot 1 queued after it";
   robots[0].moving = true;  // slow again
   out = ex.tick(robots, stay_goals(robots), *planner, false);
   EXPECT_EQ(out.command[1], g.cell(3, 0));
