@@ -587,6 +587,7 @@ nlohmann::json GdRhcrPlanner::params() const {
           {"swap", cfg_.pibt.swap},
           {"priority_reset", cfg_.pibt.priority_reset},
           {"tie_break", cfg_.pibt.tie_break == PibtOptions::TieBreak::kRandom ? "random" : "free-first"},
+          {"rotation_pibt", cfg_.pibt.rotation == PibtOptions::Rotation::kCells ? "cells" : "operations"},
           {"guidance", cfg_.guidance ? "local" : "none"},
           {"lg_window", cfg_.lg.window},
           {"lg_cost", cfg_.lg.collision_cost},

@@ -26,6 +26,7 @@ nlohmann::json PibtPlanner::params() const {
                       {"priority_reset", o.priority_reset},
                       {"swap", o.swap},
                       {"tie_break", o.tie_break == PibtOptions::TieBreak::kFreeFirst ? "free-first" : "random"},
+                      {"rotation_pibt", o.rotation == PibtOptions::Rotation::kCells ? "cells" : "operations"},
                       {"guidance", guidance_ ? "local" : "none"}};
   if (guidance_) {
     p["lg_window"] = guidance_->config().window;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "gdrhcr/mapf_in_rotation.hpp"
 #include "gdrhcr/task_stream.hpp"
 
 namespace gdrhcr {
@@ -71,13 +72,21 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
     occupied_now_[world.positions[i]] = i;
     next[i] = kNoCell;
   }
-  if (world.rotation()) {
+  if (world.rotation() && opt_.rotation == PibtOptions::Rotation::kOperations) {
     plan_operations(world, next, fixed_moves);
     for (int i : order_) occupied_now_[world.positions[i]] = kFree;
-    preferred_ = nullptr;
-    immovable_ = nullptr;
-    return;
+  } else {
+    push_all(world, next, fixed_moves);
+    if (world.rotation()) execute_with_turns(world, next);
   }
+  preferred_ = nullptr;
+  immovable_ = nullptr;
+}
+
+// The mapf step (and the rotation model's kCells): immovable agents, fixed moves and blocked
+// cells taken first, then one push per agent in priority order; the scratch tables are left clean.
+void PibtStep::push_all(const WorldView& world, std::vector<Cell>& next,
+                        const std::vector<std::pair<Cell, Cell>>& fixed_moves) {
   // Immovable agents stay: their cell is taken for t+1, so nobody pushes them or moves in.
   if (world.immovable)
     for (int i : order_)
@@ -104,13 +113,48 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   }
   if (world.blocked)
     for (Cell c : *world.blocked) occupied_next_[c] = kFree;
-  preferred_ = nullptr;
-  immovable_ = nullptr;
+}
+
+// kCells in the rotation model: the cells this call chose, executed by turning first (see
+// PibtOptions::Rotation). Agents outside the call keep out of these agents' cells (fixed moves).
+void PibtStep::execute_with_turns(const WorldView& world, std::vector<Cell>& next) const {
+  std::vector<Cell> pos, cells;
+  std::vector<Heading> heads;
+  for (int i : order_) pos.push_back(world.positions[i]), heads.push_back((*world.headings)[i]), cells.push_back(next[i]);
+  const std::vector<Action> act = rotation_actions_for_step(grid_, pos, heads, cells);
+  for (size_t k = 0; k < order_.size(); ++k) {
+    const Pose p = apply_action(grid_, {pos[k], heads[k]}, act[k]);
+    next[order_[k]] = p.cell;
+    (*world.next_headings)[order_[k]] = p.heading;
+  }
+}
+
+// kCells in the rotation model: candidates by the distance with turns after the move (from the
+// heading it leaves the agent in) plus the quarter turns it takes and the step itself (staying:
+// a step), the preferred cell first; among equals the fewest turns, then (kFreeFirst) a cell
+// nobody stands on, then at random.
+void PibtStep::order_candidates_with_turns(const WorldView& world, int ai, Cell* cand, int m) {
+  const DistRow& row = *rows_[ai];
+  const Cell pref = preferred_ ? (*preferred_)[ai] : kNoCell;
+  const Pose at = world.pose(ai);
+  std::shuffle(cand, cand + m, rng_);
+  const bool free_first = opt_.tie_break != PibtOptions::TieBreak::kRandom;
+  long long key[5];
+  for (int k = 0; k < m; ++k) {
+    const Cell c = cand[k];
+    const Heading h = c == at.cell ? at.heading : heading_of_move(grid_, at.cell, c);
+    const int turns = turn_steps(at.heading, h);
+    const long long cost = std::min(row.at(c, h), 1 << 24) + turns + 1;
+    key[k] = (c == pref ? 0LL : 1LL << 40) + cost * 8 + turns * 2 + (free_first && occupied_now_[c] != kFree ? 1 : 0);
+  }
+  for (int k = 1; k < m; ++k)
+    for (int j = k; j > 0 && key[j] < key[j - 1]; --j) std::swap(key[j], key[j - 1]), std::swap(cand[j], cand[j - 1]);
 }
 
 // Candidates: the neighbours and staying put, the preferred cell first, then nearest to the
 // goal; among equals (tie_break kFreeFirst) a cell nobody stands on, then a random order.
-void PibtStep::order_candidates(int ai, Cell* cand, int m) {
+void PibtStep::order_candidates(const WorldView& world, int ai, Cell* cand, int m) {
+  if (world.rotation()) return order_candidates_with_turns(world, ai, cand, m);
   const DistRow& row = *rows_[ai];
   const Cell pref = preferred_ ? (*preferred_)[ai] : kNoCell;
   std::shuffle(cand, cand + m, rng_);
@@ -133,10 +177,10 @@ bool PibtStep::push(const WorldView& world, int ai, int aj, std::vector<Cell>& n
   int m = 0;
   for (Cell c : grid_.neighbours(here)) cand[m++] = c;
   cand[m++] = here;
-  order_candidates(ai, cand, m);
+  order_candidates(world, ai, cand, m);
   // Swap: the agent on the best cell must get past this one; walk away and pull it along.
   int partner = -1;
-  if (opt_.swap) {
+  if (opt_.swap && !world.rotation()) {  // off in the rotation model (it holds agents back there)
     partner = swap_partner(world, ai, cand[0]);
     if (partner >= 0 && next[partner] != kNoCell) partner = -1;
     if (partner >= 0) std::reverse(cand, cand + m);

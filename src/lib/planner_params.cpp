@@ -19,6 +19,10 @@ double MapFacts::cut_cell_share() const {
   return *cut_share_;
 }
 
+double MapFacts::fleet_share() const {
+  return double(num_agents_) / std::max<size_t>(1, grid_->free_cells().size());
+}
+
 namespace {
 
 // ---------------------------------------------------------------------------------------------
@@ -39,6 +43,11 @@ std::string rule_thousands(const std::string& param, const MapFacts& f, const Pl
 }
 std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerParams&) {
   return !thousands(f) && many_cut_cells(f) ? "8" : "0";
+}
+// Fleets filling more than 90% of the free cells: guidance paths cannot be kept, PIBT alone moves.
+constexpr double kCrowdedFleet = 0.9;
+std::string rule_crowded(const std::string&, const MapFacts& f, const PlannerParams&) {
+  return f.fleet_share() > kCrowdedFleet ? "none" : "local";
 }
 std::string rule_window(const std::string&, const MapFacts& f, const PlannerParams&) {
   return thousands(f) || many_cut_cells(f) ? "20" : "30";
@@ -64,6 +73,10 @@ const std::vector<ParamRule>& param_rules() {
        "8 steps on maps with at least 1% cut cells (dead ends, one-lane passages), where motion strays from guidance; "
        "none elsewhere or past 2,000 agents",
        std::string(kRulesFigure) + "motion-forecast", rule_forecast},
+      {"crowded-fleet",
+       "fleets holding more than 90% of the free cells move by PIBT alone (guidance none): paths around others "
+       "cannot be followed there",
+       std::string(kRulesFigure) + "crowded-fleet", rule_crowded},
       {"guidance-window",
        "30 steps on maps without many cut cells (head-on meetings in long aisles show up late), up to 2,000 agents; "
        "else 20",
@@ -104,10 +117,13 @@ ParamSpec preset_row() {
 
 // PIBT's techniques (the PIBT baseline and GD-RHCR's secondary solver). The paper's PIBT has no swap.
 std::vector<ParamSpec> pibt_rows() {
-  return {flag("swap", "1", "LaCAM*'s swap operation", "0"),
+  return {flag("swap", "1", "LaCAM*'s swap operation (mapf model only)", "0"),
           flag("priority-reset", "1", "reset an agent's priority when it reaches a goal"),
           choice("tie-break", {"free-first", "random"}, "free-first",
-                 "order among equally near cells: an unoccupied one first, or random")};
+                 "order among equally near cells: an unoccupied one first, or random"),
+          choice("rotation-pibt", {"operations", "cells"}, "cells",
+                 "rotation model: PIBT over 3-action operations, or over cells chosen with turns counted and "
+                 "executed turning first", "operations")};
 }
 
 // Local guidance (PIBT following windowed paths); `product` selects GD-RHCR's product defaults.
@@ -171,8 +187,10 @@ std::vector<ParamSpec> gd_rhcr_table() {
   };
   for (auto& r : pibt_rows()) t.push_back(r);
   for (auto& r : guidance_rows(true, "local")) t.push_back(r);
-  for (auto& r : t)
+  for (auto& r : t) {
     if (r.name == "lg-contraflow") r.value = "0.1", r.paper = "0";
+    if (r.name == "guidance") r.rule = "crowded-fleet";
+  }
   return t;
 }
 

@@ -19,6 +19,7 @@ PibtOptions pibt_options(const PlannerParams& v) {
   o.priority_reset = v.flag("priority-reset");
   o.swap = v.flag("swap");
   o.tie_break = v.text("tie-break") == "random" ? PibtOptions::TieBreak::kRandom : PibtOptions::TieBreak::kFreeFirst;
+  o.rotation = v.text("rotation-pibt") == "cells" ? PibtOptions::Rotation::kCells : PibtOptions::Rotation::kOperations;
   return o;
 }
 

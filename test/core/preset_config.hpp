@@ -14,7 +14,7 @@ inline GdRhcrConfig preset_config(const std::string& preset) {
   static const Grid open = Grid::from_rows({"....", "....", "....", "...."});
   Params p;
   p.set("preset", preset);
-  GdRhcrConfig c = gd_rhcr_config(PlannerParams::resolve("gd-rhcr", p, MapFacts(open, 100)), 1);
+  GdRhcrConfig c = gd_rhcr_config(PlannerParams::resolve("gd-rhcr", p, MapFacts(open, 10)), 1);  // a fleet that leaves room (rule crowded-fleet)
   c.k_threshold = 0;  // the paper's rule for the planner's agent count
   return c;
 }

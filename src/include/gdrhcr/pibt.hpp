@@ -26,8 +26,9 @@
 // if one cannot, everything the attempt changed is undone and the next operation is tried. Every
 // agent starts the step holding its cell (WWW), so an agent nobody displaces simply waits. Only
 // the first action is executed; the step after plans again. Recursion depth and attempts per agent
-// are bounded (kOpDepth, kOpBudget): a bounded attempt fails like a blocked one. Swap emulation is
-// off in this model.
+// are bounded (kOpDepth, kOpBudget): a bounded attempt fails like a blocked one. PibtOptions::rotation
+// picks these operations or (the default) cells chosen with turns counted and executed turning
+// first. Swap emulation is off in this model (either way, it held agents back; docs/results.md).
 #pragma once
 
 #include <random>
@@ -47,6 +48,15 @@ struct PibtOptions {
   // then random; kRandom is random alone (plain PIBT).
   enum class TieBreak { kRandom, kFreeFirst };
   TieBreak tie_break = TieBreak::kFreeFirst;
+  // Rotation model: kOperations plans 3-action operations (after EPIBT, above); kCells plans
+  // cells as in the mapf model, choosing among them by the distance with turns from the heading
+  // the move leaves the agent in plus the quarter turns it needs (after WPPL, Jiang et al., arXiv
+  // 2404.16162), then executes the step by turning first: an agent facing its next cell goes
+  // forward, one that does not turns towards it and stays, and whoever was to enter a staying
+  // agent's cell stays too (rotation_actions_for_step, mapf_in_rotation.hpp). One push per agent,
+  // so its time is linear in the agents, as in the mapf model.
+  enum class Rotation { kOperations, kCells };
+  Rotation rotation = Rotation::kOperations;
 };
 
 // PIBT as published (the paper configuration and RHCR's fallback): no swap.
@@ -106,7 +116,11 @@ class PibtStep {
   std::vector<std::pair<int*, int>> undo_ints_;   // (where, old value), for rollback
   std::vector<std::pair<int, OpPath>> undo_paths_;  // (agent, old operation)
   long op_plans_ = 0;
-  void order_candidates(int ai, Cell* cand, int m);
+  void order_candidates(const WorldView& world, int ai, Cell* cand, int m);
+  void push_all(const WorldView& world, std::vector<Cell>& next,
+                const std::vector<std::pair<Cell, Cell>>& fixed_moves);
+  void execute_with_turns(const WorldView& world, std::vector<Cell>& next) const;
+  void order_candidates_with_turns(const WorldView& world, int ai, Cell* cand, int m);
   int swap_partner(const WorldView& world, int ai, Cell best) const;
   bool needs_swap(Cell pusher_at, Cell puller_at, const DistRow& pusher_row,
                   const DistRow& puller_row) const;

@@ -37,6 +37,7 @@ class MapFacts {
   MapFacts(const Grid& grid, int num_agents) : grid_(&grid), num_agents_(num_agents) {}
   int num_agents() const { return num_agents_; }
   double cut_cell_share() const;  // computed once, on first use
+  double fleet_share() const;     // agents per free cell
  private:
   const Grid* grid_;
   int num_agents_;
