@@ -88,6 +88,7 @@ BridgeOptions bridge_options_from_env() {
   o.planner = env_or("GDRHCR_PLANNER", o.planner);
   o.params = parse_params(env_or("GDRHCR_PARAMS", ""));
   o.budget_ms = env_number("GDRHCR_BUDGET_MS", 0);
+  o.times_out = env_or("GDRHCR_TIMES_OUT", "");
   o.seed = static_cast<uint64_t>(env_number("GDRHCR_SEED", 0));
   o.dist_budget_mb = static_cast<int>(env_number("GDRHCR_DIST_MB", o.dist_budget_mb));
   if (o.dist_budget_mb < 1) throw std::invalid_argument("GDRHCR_DIST_MB must be at least 1");
@@ -108,7 +109,7 @@ struct Bridge::Impl {
     for (auto& [k, v] : o.params) params.set(k, v);
     const double budget_s = o.budget_ms / 1000.0;
     if (budget_s > 0 && o.planner == "gd-rhcr" && !params.has("step-budget"))
-      params.set("step-budget", std::to_string(budget_s));
+      params.set("step-budget", std::to_string(kPlannerShare * budget_s));
     if (budget_s > 0 && o.planner == "rhcr" && !params.has("timeout")) params.set("timeout", std::to_string(budget_s));
     const PlannerParams values = PlannerParams::resolve(o.planner, params, MapFacts(grid, n));
     params.check_all_used("GDRHCR_PARAMS for planner " + o.planner);
@@ -124,6 +125,8 @@ struct Bridge::Impl {
     }
     std::fprintf(stderr, "gdrhcr lorr adapter: planner %s, turns %s, budget %g ms\n", o.planner.c_str(),
                  turn_planning_name(turns), o.budget_ms);
+    if (!o.times_out.empty() && !(times = std::fopen(o.times_out.c_str(), "w")))
+      throw std::invalid_argument("GDRHCR_TIMES_OUT: cannot write " + o.times_out);
     pos.resize(n);
     headings.resize(n);
     next_headings.resize(n);
@@ -143,7 +146,20 @@ struct Bridge::Impl {
     return true;
   }
 
+  ~Impl() {
+    if (times) std::fclose(times);
+  }
+  // Our time for one step, to GDRHCR_TIMES_OUT.
+  void record(Clock::time_point t0) {
+    if (!times) return;
+    std::fprintf(times, "%.3f\n", std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    if (++recorded % 100 == 0) std::fflush(times);
+  }
+
+  static constexpr double kPlannerShare = 0.9;  // of the budget, for GD-RHCR's step-budget
   BridgeOptions options;
+  std::FILE* times = nullptr;
+  long recorded = 0;
   Grid grid;
   DistTable dist;  // rotation rows: the world's, and the native planners'
   const DistTable* planning_dist = nullptr;  // the rows the planner uses
@@ -177,11 +193,15 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
     m.headings[i] = static_cast<Heading>(headings[i]);
   }
   actions.assign(n, kStartKitWait);
-  // Rows first, within half the Start-Kit's limit; a step that spent over 30% of it on them
-  // waits (valid), so the planner's own step never runs late.
+  // Rows first, within half our budget (half the Start-Kit's limit without one); a step that
+  // spent over a tenth of the budget (30% of the limit) on them waits (valid), so the planner's
+  // own step never runs late.
   const auto limit = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(time_limit_s));
-  if (!m.warm_rows(t0 + limit / 2) || Clock::now() - t0 > limit * 3 / 10) {
+  const auto budget = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(m.options.budget_ms));
+  const bool capped = m.options.budget_ms > 0 && budget < limit;
+  if (!m.warm_rows(t0 + (capped ? budget : limit) / 2) || Clock::now() - t0 > (capped ? budget / 10 : limit * 3 / 10)) {
     std::fprintf(stderr, "gdrhcr lorr adapter: timestep %d: computing distance rows, every agent waits\n", timestep);
+    m.record(t0);
     return;
   }
   std::fill(m.next.begin(), m.next.end(), kNoCell);
@@ -195,6 +215,7 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
     if (!a) throw std::logic_error("lorr adapter: the planner's step for agent " + std::to_string(i) + " is no action");
     actions[i] = start_kit_action(*a);
   }
+  m.record(t0);
 }
 
 }  // namespace gdrhcr_lorr

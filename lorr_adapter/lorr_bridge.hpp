@@ -14,8 +14,11 @@ namespace gdrhcr_lorr {
 // Read from the environment (scripts/bench_lorr.sh sets them):
 //   GDRHCR_PLANNER    a name of gdrhcr::make_planner (default gd-rhcr)
 //   GDRHCR_PARAMS     its parameters as on gdrhcr_sim's command line, e.g. "--H 10 --V 3"
-//   GDRHCR_BUDGET_MS  our planner's time per step in ms (0 = none): GD-RHCR's step-budget and
-//                     RHCR's PBS timeout unless GDRHCR_PARAMS sets them
+//   GDRHCR_BUDGET_MS  our time per step in ms (0 = none), distance rows included: the rows of
+//                     new goals get half of it (a step that spends over a tenth of it on them is
+//                     all waits), GD-RHCR's step-budget 90% of it and RHCR's PBS timeout all of
+//                     it, unless GDRHCR_PARAMS sets them
+//   GDRHCR_TIMES_OUT  a file that gets our time per step in ms, one line per step (optional)
 //   GDRHCR_SEED       seed for the planner's tie-breaks (default 0)
 //   GDRHCR_DIST_MB    memory for distance rows (default 2048: a fleet of 10,000 on LoRR's
 //                     warehouse holds about 10,000 rows of 77 KB)
@@ -26,6 +29,7 @@ struct BridgeOptions {
   std::string planner = "gd-rhcr";
   std::vector<std::pair<std::string, std::string>> params;
   double budget_ms = 0;
+  std::string times_out;  // where our time per step goes (empty: nowhere)
   uint64_t seed = 0;
   std::string turns;  // "native" or "mapf-wait"; empty = gdrhcr::kLorrTurnPlanning
   int dist_budget_mb = 2048;

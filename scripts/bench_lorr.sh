@@ -7,7 +7,9 @@
 # `lifelong` on INSTANCE_JSON for STEPS timesteps with the League's limits (planTimeLimit 1 s per
 # step, preprocessTimeLimit 1800 s) and leaves the Start-Kit's output JSON at OUT_JSON
 # (numTaskFinished, AllValid, errors, plannerTimes, ...). BUDGET_MS caps our planner's time per
-# step below the League's 1 s (default 0 = no cap of ours).
+# step below the League's 1 s (default 0 = no cap of ours). Our own time per step (the adapter's
+# clock, from the Start-Kit's call to our answer) goes to OUT_JSON with .times for .json, one line
+# (ms) per step.
 # Our planner: GDRHCR_PLANNER (default gd-rhcr, any name of gdrhcr_sim --planner) and
 # GDRHCR_PARAMS (its parameters, e.g. "--H 10 --V 3"); GDRHCR_SEED. See lorr_adapter/lorr_bridge.hpp.
 # Prints one summary line; exits non-zero if the build or the run fails.
@@ -57,6 +59,7 @@ cmake --build "$build/cmake" -j"$jobs" >"$build/build.log" 2>&1 ||
 rm -f "$out"
 log=${out%.json}.log
 export GDRHCR_BUDGET_MS=$budget
+export GDRHCR_TIMES_OUT=${out%.json}.times
 set +e
 "$build/cmake/lifelong" --inputFile "$instance" --output "$out" --simulationTime "$steps" \
   --planTimeLimit "${LORR_PLAN_TIME_LIMIT:-1}" --preprocessTimeLimit "${LORR_PREPROCESS_TIME_LIMIT:-1800}" \
@@ -68,13 +71,17 @@ if [ $rc -ne 0 ] || [ ! -f "$out" ]; then
   echo "bench_lorr: lifelong exited with $rc (stdout ${out%.json}.stdout, log $log)" >&2
   exit 1
 fi
-/usr/bin/python3 - "$out" "$instance" "$steps" "$budget" <<'PY'
+/usr/bin/python3 - "$out" "$instance" "$steps" "$budget" "$GDRHCR_TIMES_OUT" <<'PY'
 import json, sys
-out, instance, steps, budget = sys.argv[1:]
+out, instance, steps, budget, times_out = sys.argv[1:]
 r = json.load(open(out))
 times = r.get("plannerTimes", [])
 ms = 1000 * sum(times) / len(times) if times else float("nan")
+ours = sorted(float(x) for x in open(times_out).read().split())
+p99 = ours[min(len(ours) - 1, int(0.99 * len(ours)))] if ours else float("nan")
+mean = sum(ours) / len(ours) if ours else float("nan")
 print(f"bench_lorr: {instance} {steps} steps, budget {budget} ms: numTaskFinished {r['numTaskFinished']}, "
       f"AllValid {r['AllValid']}, errors {len(r.get('errors', []))}, "
-      f"planner {ms:.1f} ms per step (max {1000 * max(times, default=0):.1f}), output {out}")
+      f"planner {ms:.1f} ms per step (max {1000 * max(times, default=0):.1f}) by the Start-Kit, "
+      f"ours mean {mean:.1f} p99 {p99:.1f} max {max(ours, default=float('nan')):.1f} ms, output {out}")
 PY
