@@ -14,6 +14,16 @@ a move into a cell held by a robot that is not leaving it, or that a robot still
 entering (counted as `blocked moves` on /diagnostics; zero when the planner's commands are
 followed by everyone).
 
+Turning robots (issue 23): every robot has a heading (east, south, west, north; RobotState.heading,
+  the tf yaw follows it) and moves only forward, in the direction it faces.
+  ~turn_time t (default 1): ticks (tick periods, times the robot's speed factor) a quarter turn
+      in place takes; 0 = robots turn instantly (the move's direction is taken at once, as robots
+      that need not turn). A robot at rest whose command names a neighbour it does not face turns
+      towards it first (quarter turn by quarter turn, in its cell), then moves; one whose command
+      names its own cell and a heading (StepCommand.next_heading) turns to it. A quarter turn
+      under way is finished; the reported heading switches when it is. Start headings are
+      seeded (~seed).
+
 Realistic execution (issue 13):
   ~speed_spread s (default 0): each robot's move takes move_fraction * tick_period * f, with f
       drawn per robot uniformly from [1 - s, 1 + s] (seeded), so robots run at different speeds.
@@ -76,6 +86,25 @@ def yaw_quaternion(yaw):
     return (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
 
 
+# Headings as the planner numbers them (east, south, west, north; RobotState.HEADING_* - 1) and
+# their cell steps: south is +row in cells, -y in the map frame, so a heading's yaw is -h * pi/2.
+HEADING_STEPS = ((1, 0), (0, 1), (-1, 0), (0, -1))
+
+
+def heading_yaw(h):
+    return (0.0, -math.pi / 2.0, math.pi, math.pi / 2.0)[h]
+
+
+def heading_of_move(src, dst):
+    return HEADING_STEPS.index((dst[0] - src[0], dst[1] - src[1]))
+
+
+def quarter_turn(h, target):
+    """+1 (clockwise) or -1 (counter-clockwise): the first quarter turn from h towards target
+    (a half turn starts clockwise)."""
+    return -1 if (target - h) % 4 == 3 else 1
+
+
 class Robot(object):
     def __init__(self, rid, cell):
         self.id = rid
@@ -85,13 +114,15 @@ class Robot(object):
         self.t0 = 0.0
         self.duration = 0.0
         self.moving = False
-        self.yaw = 0.0
+        self.heading = 0  # east, south, west, north = 0..3
+        self.turning = 0  # +1 / -1 while a quarter turn clockwise / counter-clockwise is under way
         self.mode = RobotState.MODE_IDLE
         self.task_id = -1
         self.reported = None  # (cell, moving) of the last published state
         self.speed = 1.0  # move time factor (~speed_spread)
         self.delay_until = 0.0  # a random delay (~p_delay) holds the robot until then
         self.cmd = None  # the cell of its last command: at rest, it starts the move when it can
+        self.cmd_heading = None  # the heading of its last command (None: any)
         self.blocked_on = None  # the (cell, target) move the interlock stopped (counted once)
 
 
@@ -105,6 +136,10 @@ class FleetSim(object):
         self.p_delay = float(rospy.get_param("~p_delay", 0.0))
         self.max_delay_ticks = int(rospy.get_param("~max_delay_ticks", 20))
         self.interlock = bool(rospy.get_param("~interlock", True))
+        self.turn_time = float(rospy.get_param("~turn_time", 1.0))
+        if not self.turn_time >= 0.0:
+            rospy.logfatal("fleet_sim: ~turn_time must be >= 0 ticks per quarter turn, not %s", self.turn_time)
+            sys.exit(1)
         if not 0.0 <= self.speed_spread < 1.0:
             rospy.logfatal("fleet_sim: ~speed_spread must be in [0, 1), not %s", self.speed_spread)
             sys.exit(1)
@@ -162,6 +197,11 @@ class FleetSim(object):
         speed_rng = random.Random(self.seed * 104729 + 1)
         for r in self.robots:
             r.speed = speed_rng.uniform(1.0 - self.speed_spread, 1.0 + self.speed_spread)
+        heading_rng = random.Random(self.seed * 15485863 + 5)
+        for r in self.robots:
+            r.heading = heading_rng.randrange(4)
+        self.turns = 0
+        self.turns_before_moves = 0  # turns a command to a neighbour not faced made (none in rotation)
         rospy.loginfo("fleet_sim: %d robots on a %dx%d map", self.n, self.grid.width, self.grid.height)
 
         self.state_pub = rospy.Publisher("robot_states", RobotStateArray, queue_size=10)
@@ -242,6 +282,10 @@ class FleetSim(object):
 
     # --- motion -----------------------------------------------------------------------------
     def advance(self, now):
+        for r in self.robots:  # quarter turns done (a turn keeps the robot in its cell)
+            if r.turning and now >= r.t0 + r.duration:
+                r.heading = (r.heading + r.turning) % 4
+                r.turning = 0
         arriving = [r for r in self.robots if r.moving and now >= r.t0 + r.duration]
         if not arriving:
             return
@@ -304,6 +348,7 @@ class FleetSim(object):
                 if self.dead(r.id, now) or r.id in self.absent:
                     continue  # a dead or absent robot hears nothing
                 target = (c.next_x, c.next_y)
+                heading = c.next_heading - 1 if 1 <= c.next_heading <= 4 else None
                 if not self.offline(r.id, now):
                     r.mode = c.mode
                     r.task_id = c.task_id
@@ -319,6 +364,7 @@ class FleetSim(object):
                     r.cmd = None  # keeps still
                     continue
                 r.cmd = target
+                r.cmd_heading = heading
             slips = self.slips
             self.start_moves(now, e)
             # A robot that has just slipped says so at once (where it is heading), as a driver
@@ -333,15 +379,19 @@ class FleetSim(object):
         for r in self.robots:  # OFFLINE at rest cancels its move (the manager gives the cell away)
             if not r.moving and r.cmd is not None and self.offline(r.id, now):
                 r.cmd = None
-        pending = [r for r in self.robots if not r.moving and r.cmd is not None and r.cmd != r.cell]
+        frozen = [(r.moving or r.turning or self.stalled(r.id, now) or self.offline(r.id, now) or
+                   self.dead(r.id, now) or self.delayed(r.id, now) or r.id in self.absent) for r in self.robots]
+        pending = [r for r in self.robots if not r.moving and r.cmd is not None and r.cmd != r.cell and
+                   not self.start_turn(r, now, frozen[r.id])]
+        for r in self.robots:  # a command to stay with a heading: turn in place
+            if not r.moving and r.cmd == r.cell and r.cmd_heading is not None:
+                self.start_turn(r, now, frozen[r.id])
         if not pending:
             return
         cells = [r.cell for r in self.robots]
         targets = list(cells)
         for r in pending:
             targets[r.id] = r.cmd
-        frozen = [(r.moving or self.stalled(r.id, now) or self.offline(r.id, now) or self.dead(r.id, now) or
-                   self.delayed(r.id, now) or r.id in self.absent) for r in self.robots]
         if all(frozen[r.id] for r in pending):
             return
         # A robot still moving holds the cell it enters as well.
@@ -386,7 +436,33 @@ class FleetSim(object):
             r.src, r.dst = r.cell, targets[i]
             r.t0, r.duration, r.moving = now, max(0.01, duration * r.speed), True
             r.blocked_on = None
-            r.yaw = math.atan2(-(r.dst[1] - r.src[1]), r.dst[0] - r.src[0])
+            r.heading = heading_of_move(r.src, r.dst)  # faces it (turned first, or instantly)
+
+    def start_turn(self, r, now, frozen):
+        """Robot r at rest turns towards its command's heading (a move's direction, else the
+        commanded heading) unless it faces it: a quarter turn of ~turn_time ticks starts (not when
+        frozen or already turning), or with ~turn_time 0 it faces it at once. True while it must
+        turn before it moves."""
+        want = heading_of_move(r.cell, r.cmd) if r.cmd != r.cell else r.cmd_heading
+        if want is None or want == r.heading:
+            return False
+        if self.turn_time <= 0:
+            r.heading = want
+            return False
+        if not frozen and not r.turning:
+            r.turning = quarter_turn(r.heading, want)
+            r.t0, r.duration = now, max(0.01, self.turn_time * self.tick_period * r.speed)
+            self.turns += 1
+            self.turns_before_moves += r.cmd != r.cell
+        return True
+
+    def yaw_of(self, r, now):
+        """The robot's yaw: its heading's, turning smoothly during a quarter turn."""
+        yaw = heading_yaw(r.heading)
+        if r.turning:
+            s = min(1.0, max(0.0, (now - r.t0) / r.duration))
+            yaw -= r.turning * (s * s * (3 - 2 * s)) * math.pi / 2.0
+        return yaw
 
     def pose_of(self, r, now):
         sx, sy = self.grid.world(*r.src)
@@ -426,13 +502,14 @@ class FleetSim(object):
             s.id = r.id
             s.x, s.y = r.cell
             px, py = self.pose_of(r, now)
-            q = yaw_quaternion(r.yaw)
+            q = yaw_quaternion(self.yaw_of(r, now))
             s.pose = Pose()
             s.pose.position.x, s.pose.position.y = px, py
             s.pose.orientation.x, s.pose.orientation.y, s.pose.orientation.z, s.pose.orientation.w = q
             s.mode = RobotState.MODE_OFFLINE if self.offline(r.id, now) else r.mode
             s.task_id = r.task_id
             s.moving = r.moving
+            s.heading = r.heading + 1  # RobotState.HEADING_*
             if r.moving:  # the cell it is entering, as a driver knows it (also when it slips)
                 s.entering_known = True
                 s.entering_x, s.entering_y = r.dst
@@ -467,6 +544,8 @@ class FleetSim(object):
                       ("interlock", "on" if self.interlock else "off"),
                       ("interlock would act", self.interlock_would_act),
                       ("collisions", self.collisions), ("swaps", self.swaps),
+                      ("turn time", self.turn_time), ("turns", self.turns),
+                      ("turns before moves", self.turns_before_moves),
                       ("speed spread", self.speed_spread), ("p_delay", self.p_delay),
                       ("max delay ticks", self.max_delay_ticks), ("delays started", self.delays_started),
                       ("delayed now", sum(1 for r in self.robots if now < r.delay_until)),

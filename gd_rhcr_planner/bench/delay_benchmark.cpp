@@ -146,7 +146,7 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
   if (why) {
     DelayedFleet::Between inner = between;
     between = [&, inner](const std::vector<RobotRecord>& reports) {
-      std::vector<std::pair<int, Cell>> cmds;
+      std::vector<DelayedFleet::Command> cmds;
       if (inner) cmds = inner(reports);
       account(ex, fleet, g, r);
       return cmds;

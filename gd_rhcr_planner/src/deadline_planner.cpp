@@ -16,6 +16,8 @@ struct DeadlinePlanner::Job {
   bool has_immovable = false;
   std::vector<gdrhcr::Cell> blocked;
   bool has_blocked = false;
+  gdrhcr::ActionModel action_model = gdrhcr::ActionModel::kMapf;
+  std::vector<gdrhcr::Heading> headings, next_headings;  // rotation
   std::shared_ptr<const void> keep_alive;
   std::vector<gdrhcr::Cell> next;
   gdrhcr::StepReport report;
@@ -49,6 +51,8 @@ void DeadlinePlanner::worker_loop() {
       gdrhcr::WorldView world{*job->grid, *job->dist, job->timestep, job->positions, job->goals};
       if (job->has_immovable) world.immovable = &job->immovable;
       if (job->has_blocked) world.blocked = &job->blocked;
+      world.action_model = job->action_model;
+      if (world.rotation()) world.headings = &job->headings, world.next_headings = &job->next_headings;
       try {
         job->report = primary_->plan_step(world, job->next);
       } catch (const std::exception& e) {
@@ -89,6 +93,8 @@ DeadlineOutcome DeadlinePlanner::step(const gdrhcr::WorldView& world, std::vecto
       job->goals = world.goals;
       if (world.immovable) job->immovable = *world.immovable, job->has_immovable = true;
       if (world.blocked) job->blocked = *world.blocked, job->has_blocked = true;
+      job->action_model = world.action_model;
+      if (world.rotation()) job->headings = *world.headings, job->next_headings = *world.next_headings;
       job->keep_alive = std::move(keep_alive);
       job->next = next;
       job_ = job;
@@ -101,6 +107,7 @@ DeadlineOutcome DeadlinePlanner::step(const gdrhcr::WorldView& world, std::vecto
       }
       if (job->done && job->error.empty()) {
         next = job->next;
+        if (world.rotation()) *world.next_headings = job->next_headings;
         out.report = job->report;
         return out;
       }

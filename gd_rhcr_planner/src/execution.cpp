@@ -9,7 +9,10 @@
 
 namespace gd_rhcr_planner {
 
+using gdrhcr::Heading;
 using gdrhcr::kNoCell;
+using gdrhcr::kNoHeading;
+using gdrhcr::Pose;
 
 namespace {
 
@@ -17,6 +20,8 @@ namespace {
 bool on_hold(const std::vector<uint8_t>& hold, int r) { return r < static_cast<int>(hold.size()) && hold[r]; }
 
 std::string who(int r) { return "robot " + std::to_string(r); }
+
+bool valid_heading(Heading h) { return h >= 0 && h < gdrhcr::kNumHeadings; }
 
 // The caller's flags, or none.
 const std::vector<uint8_t>& hold_flags(const std::vector<uint8_t>* hold) {
@@ -38,12 +43,23 @@ const char* robot_health_name(RobotHealth h) {
 }
 
 Executor::Executor(const gdrhcr::Grid& grid, const gdrhcr::DistTable& dist, int num_robots, ExecutorConfig cfg)
-    : grid_(grid), dist_(dist), cfg_(cfg), tracks_(num_robots), agent_of_robot_(num_robots, -1), validator_(grid) {
+    : grid_(grid), dist_(dist), cfg_(cfg), tracks_(num_robots), agent_of_robot_(num_robots, -1),
+      validator_(grid, cfg.action_model) {
   if (cfg_.commit_horizon < 1) throw gdrhcr::ParamError("~commit_horizon must be >= 1");
+  if (dist.action_model() != cfg_.action_model)
+    throw gdrhcr::ParamError(std::string("executor: the distance table is in the ") +
+                             gdrhcr::action_model_name(dist.action_model()) + " action model, the robots in " +
+                             gdrhcr::action_model_name(cfg_.action_model));
 }
 
 std::vector<Cell> Executor::committed(int r) const {
-  return std::vector<Cell>(tracks_[r].path.begin(), tracks_[r].path.end());
+  std::vector<Cell> cells;
+  for (const Pose& p : tracks_[r].path) cells.push_back(p.cell);
+  return cells;
+}
+
+std::vector<Pose> Executor::committed_poses(int r) const {
+  return std::vector<Pose>(tracks_[r].path.begin(), tracks_[r].path.end());
 }
 
 // The robot other than `except` that is in c, is entering c, or claims c; -1 when none.
@@ -53,7 +69,7 @@ int Executor::holder_of(Cell c, int except) const {
     const Track& t = tracks_[q];
     if (t.claimed == c) return q;
     if (!t.active) continue;
-    if (t.cell == c || (t.dispatched && t.path.front() == c)) return q;
+    if (t.cell == c || (t.dispatched && t.path.front().cell == c)) return q;
     if (t.unknown_move)
       for (Cell nb : grid_.neighbours(t.cell))
         if (nb == c) return q;
@@ -65,7 +81,7 @@ int Executor::holder_of(Cell c, int except) const {
 // on its way), the cell it claims, or every neighbour when it moves without a command.
 void Executor::add_blocked_cells(int r, std::vector<Cell>& blocked) const {
   const Track& t = tracks_[r];
-  if (t.dispatched) blocked.push_back(t.path.front());
+  if (t.dispatched) blocked.push_back(t.path.front().cell);
   if (t.claimed != kNoCell) blocked.push_back(t.claimed);
   if (t.unknown_move)
     for (Cell nb : grid_.neighbours(t.cell)) blocked.push_back(nb);
@@ -106,9 +122,11 @@ bool Executor::place(int r, const RobotRecord& rec, TickOutput& out) {
   t.reported_moving = rec.moving;
   t.active = true;
   t.cell = x;
+  t.heading = rec.heading;
+  if (rotation() && !valid_heading(t.heading)) t.heading = gdrhcr::kEast;  // an obstacle (report_health) facing any way
   t.unknown_move = rec.moving && rec.entering == kNoCell;  // known: only that cell is blocked
   if (rec.moving) t.claimed = rec.entering;
-  t.health = rec.moving ? RobotHealth::kInconsistent : rec.reported_offline ? RobotHealth::kOffline : RobotHealth::kOk;
+  t.health = rec.moving ? RobotHealth::kInconsistent : report_health(r, rec, out);
   if (rec.moving) out.warnings.push_back(who(r) + " first reports while moving: an obstacle until it stops");
   if (agent_of_robot_[r] < 0) {  // its planner agent index, for good
     agent_of_robot_[r] = static_cast<int>(robot_of_agent_.size());
@@ -123,7 +141,7 @@ bool Executor::fall_silent(int r, TickOutput& out) {
   Track& t = tracks_[r];
   if (t.health == RobotHealth::kSilent) return false;
   out.warnings.push_back(who(r) + " is silent: an obstacle at " + grid_.describe(t.cell) +
-                         (t.dispatched ? " and " + grid_.describe(t.path.front()) : std::string()));
+                         (t.dispatched ? " and " + grid_.describe(t.path.front().cell) : std::string()));
   t.health = RobotHealth::kSilent;
   return true;
 }
@@ -135,22 +153,26 @@ bool Executor::take_report(int r, const std::vector<RobotRecord>& robots, TickOu
   const RobotRecord& rec = robots[r];
   const Cell x = rec.cell;
   bool need_resync = false;
-  RobotHealth h = rec.reported_offline ? RobotHealth::kOffline : RobotHealth::kOk;
+  RobotHealth h = report_health(r, rec, out);
+  if (!rotation()) t.heading = rec.heading;  // mapf: the robot's own (commands turn it before a move)
   if (x == t.cell) {
     if (!rec.moving || rec.entering != t.claimed) t.claimed = kNoCell;
     if (t.dispatched && rec.reported_offline && !rec.moving) {  // OFFLINE at rest: it will not make the move
       t.dispatched = false;
       t.path.clear();
       need_resync = true;
+    } else if (rotation() && h == RobotHealth::kOk) {
+      need_resync |= take_heading(r, rec, out);
     }
-  } else if (t.dispatched && x == t.path.front()) {
+  } else if (t.dispatched && x == t.path.front().cell) {
     arrive(r);
+    if (rotation() && h == RobotHealth::kOk) need_resync |= take_heading(r, rec, out);
   } else if (take_unexpected_cell(r, x, robots, out)) {
     need_resync = true;
   } else {
     h = RobotHealth::kInconsistent;
   }
-  if (x == t.cell && rec.moving && rec.entering != kNoCell && !(t.dispatched && rec.entering == t.path.front())) {
+  if (x == t.cell && rec.moving && rec.entering != kNoCell && !(t.dispatched && rec.entering == t.path.front().cell)) {
     need_resync |= take_entering(r, rec.entering, robots, out);
     h = RobotHealth::kInconsistent;
   }
@@ -163,6 +185,41 @@ bool Executor::take_report(int r, const std::vector<RobotRecord>& robots, TickOu
   return set_health(r, h, out) || need_resync;
 }
 
+// The health a placed robot's report gives it: offline when it says so; in the rotation model a
+// report without a heading makes it inconsistent (an obstacle: it cannot be planned).
+RobotHealth Executor::report_health(int r, const RobotRecord& rec, TickOutput& out) const {
+  if (rec.reported_offline) return RobotHealth::kOffline;
+  if (rotation() && !valid_heading(rec.heading)) {
+    if (tracks_[r].health != RobotHealth::kInconsistent)
+      out.warnings.push_back(who(r) + " reports no heading, which the rotation action model needs: an obstacle at " +
+                             grid_.describe(rec.cell));
+    return RobotHealth::kInconsistent;
+  }
+  return RobotHealth::kOk;
+}
+
+// Rotation model: robot r reports its known cell (or just arrived in its dispatched one) with
+// heading rec.heading. Its dispatched turn is done when that is the turn's heading at rest; any
+// other new heading (a turn nobody commanded, or a forward move that ended turned) is believed:
+// its commitments not under way are dropped and it is replanned from there (true: resync).
+bool Executor::take_heading(int r, const RobotRecord& rec, TickOutput& out) {
+  Track& t = tracks_[r];
+  if (rec.heading == t.heading) return false;
+  const bool turning = t.dispatched && t.path.front().cell == t.cell;
+  if (turning && rec.heading == t.path.front().heading && !rec.moving) {
+    arrive(r);
+    return false;
+  }
+  if (rec.moving) return false;  // on its way into its dispatched cell: judged on arrival
+  out.warnings.push_back(who(r) + " reports heading " + gdrhcr::heading_name(rec.heading) + " in " +
+                         grid_.describe(t.cell) + ", not the one it was commanded (" +
+                         gdrhcr::heading_name(turning ? t.path.front().heading : t.heading) + "): replanned from there");
+  t.heading = rec.heading;
+  t.dispatched = false;  // at rest in its cell: a forward move it no longer faces is not made
+  t.path.clear();
+  return true;
+}
+
 // Robot r reports cell x, which it was not commanded into. A slip (it ended in a free neighbour of
 // the cell it was in or was sent to) is taken as the truth (true: replanned from there), also when another robot
 // was only commanded into x and still reports at rest where it was: that robot's move is taken
@@ -173,7 +230,8 @@ bool Executor::take_unexpected_cell(int r, Cell x, const std::vector<RobotRecord
   Track& t = tracks_[r];
   int other = holder_of(x, r);
   // One move from where it was, or from the cell it was sent to (it arrived, unreported, and slipped).
-  const bool reachable = grid_.step_allowed(t.cell, x) || (t.dispatched && grid_.step_allowed(t.path.front(), x));
+  const bool reachable =
+      grid_.step_allowed(t.cell, x) || (t.dispatched && grid_.step_allowed(t.path.front().cell, x));
   if (other >= 0 && reachable && withdraw_move(other, x, r, robots)) {
     out.warnings.push_back(who(other) + "'s move into " + grid_.describe(x) + " is taken back: " + who(r) +
                            " slipped into it");
@@ -181,8 +239,9 @@ bool Executor::take_unexpected_cell(int r, Cell x, const std::vector<RobotRecord
   }
   if (other < 0 && reachable) {
     out.warnings.push_back(who(r) + " reports " + grid_.describe(x) + ", not the cell it was commanded (" +
-                           grid_.describe(t.dispatched ? t.path.front() : t.cell) + "): replanned from there");
+                           grid_.describe(t.dispatched ? t.path.front().cell : t.cell) + "): replanned from there");
     t.cell = x;
+    if (!rotation() || valid_heading(robots[r].heading)) t.heading = robots[r].heading;
     t.dispatched = false;
     t.path.clear();
     t.claimed = kNoCell;
@@ -213,7 +272,7 @@ bool Executor::take_entering(int r, Cell x, const std::vector<RobotRecord>& robo
     other = -1;
   }
   out.warnings.push_back(who(r) + " is moving into " + grid_.describe(x) + ", not the cell it was commanded (" +
-                         grid_.describe(t.dispatched ? t.path.front() : t.cell) + ")" +
+                         grid_.describe(t.dispatched ? t.path.front().cell : t.cell) + ")" +
                          (other >= 0 ? ", which robot " + std::to_string(other) + " holds" : std::string()) +
                          ": an obstacle at both cells until it stops");
   t.claimed = x;
@@ -226,7 +285,7 @@ bool Executor::take_entering(int r, Cell x, const std::vector<RobotRecord>& robo
 bool Executor::withdraw_move(int q, Cell x, int r, const std::vector<RobotRecord>& robots) {
   Track& t = tracks_[q];
   const RobotRecord& rec = robots[q];
-  if (!t.active || t.health != RobotHealth::kOk || !t.dispatched || t.path.front() != x || t.cell == x ||
+  if (!t.active || t.health != RobotHealth::kOk || !t.dispatched || t.path.front().cell != x || t.cell == x ||
       t.claimed == x || !rec.reported || rec.silent || rec.moving || rec.cell != t.cell)
     return false;
   t.dispatched = false;  // does anybody else hold x?
@@ -251,16 +310,18 @@ bool Executor::set_health(int r, RobotHealth h, TickOutput& out) {
 }
 
 // Robot r reports arrival in its dispatched cell: it has left its cell, which the next robot in
-// that cell's queue may now enter.
+// that cell's queue may now enter. A turn done leaves the robot in its cell (first in its queue).
 void Executor::arrive(int r) {
   Track& t = tracks_[r];
-  auto it = visits_.find(t.cell);
+  const Pose p = t.path.front();
+  auto it = p.cell != t.cell ? visits_.find(t.cell) : visits_.end();
   if (it != visits_.end()) {
     auto pos = std::find(it->second.begin(), it->second.end(), r);
     if (pos != it->second.end()) it->second.erase(pos);
     if (it->second.empty()) visits_.erase(it);
   }
-  t.cell = t.path.front();
+  t.cell = p.cell;
+  t.heading = p.heading;
   t.path.pop_front();
   t.dispatched = false;
   t.claimed = kNoCell;
@@ -275,10 +336,10 @@ std::vector<Cell> Executor::unaccounted_cells(const std::vector<RobotRecord>& ro
     const Track& t = tracks_[r];
     const RobotRecord& rec = robots[r];
     if (!rec.reported || rec.silent || rec.cell == kNoCell) continue;
-    const bool known = t.active && (rec.cell == t.cell || (t.dispatched && rec.cell == t.path.front()));
+    const bool known = t.active && (rec.cell == t.cell || (t.dispatched && rec.cell == t.path.front().cell));
     if (!known) cells.push_back(rec.cell);
     if (rec.moving && rec.entering != kNoCell) {
-      if (!(t.active && t.dispatched && rec.entering == t.path.front())) cells.push_back(rec.entering);
+      if (!(t.active && t.dispatched && rec.entering == t.path.front().cell)) cells.push_back(rec.entering);
     } else if (rec.moving && !(t.active && t.dispatched)) {
       for (Cell nb : grid_.neighbours(rec.cell)) cells.push_back(nb);
     }
@@ -296,8 +357,9 @@ std::vector<int> Executor::advance(const std::vector<RobotRecord>& robots, const
     Track& t = tracks_[r];
     const RobotRecord& rec = robots[r];
     if (!t.active || t.health != RobotHealth::kOk || !t.dispatched || !rec.reported || rec.silent ||
-        rec.reported_offline || rec.moving || rec.cell != t.path.front())
+        rec.reported_offline || rec.moving || rec.cell != t.path.front().cell)
       continue;
+    if (t.path.front().cell == t.cell && rec.heading != t.path.front().heading) continue;  // still turning
     arrive(r);
     t.reported_moving = false;
     arrived = true;
@@ -315,10 +377,25 @@ Cell Executor::command(int r) const {
   if (t.health == RobotHealth::kInconsistent) {
     // Told to stay where it reports; a robot moving where we cannot tell gets no command (it stops
     // at the end of its move, and its next report is judged), unless it is making its own move.
-    if (t.reported_moving) return t.dispatched && t.claimed == kNoCell ? t.path.front() : kNoCell;
+    if (t.reported_moving) return t.dispatched && t.claimed == kNoCell ? t.path.front().cell : kNoCell;
     return t.claimed != kNoCell ? t.claimed : t.cell;
   }
-  return t.dispatched ? t.path.front() : t.cell;
+  return t.dispatched ? t.path.front().cell : t.cell;
+}
+
+Heading Executor::command_heading(int r) const {
+  const Track& t = tracks_[r];
+  const Cell c = command(r);
+  if (t.dispatched && !t.path.empty() && c == t.path.front().cell) return t.path.front().heading;
+  if (!rotation() && t.health == RobotHealth::kOk && c == t.cell && !t.path.empty() && t.heading != kNoHeading)
+    return t.path.front().heading;  // waits for its next move: turns towards it meanwhile
+  return t.heading;
+}
+
+gdrhcr::Action command_action(Pose known, Cell cell, Heading heading) {
+  if (cell != known.cell) return gdrhcr::Action::kForward;
+  if (heading == kNoHeading || known.heading == kNoHeading || heading == known.heading) return gdrhcr::Action::kWait;
+  return ((heading - known.heading) & 3) == 3 ? gdrhcr::Action::kCounterClockwise : gdrhcr::Action::kClockwise;
 }
 
 std::vector<Cell> Executor::accepted_cells() const {
@@ -336,7 +413,8 @@ int Executor::revoke(int r) {
   const size_t keep = t.dispatched ? 1 : 0;
   if (t.path.size() <= keep) return 0;
   for (size_t k = t.path.size(); k-- > keep;) {  // r's last visit of each dropped cell goes
-    auto it = visits_.find(t.path[k]);
+    if (t.path[k].cell == (k == 0 ? t.cell : t.path[k - 1].cell)) continue;  // a turn: no visit
+    auto it = visits_.find(t.path[k].cell);
     if (it == visits_.end()) continue;  // never: every committed cell has r's visit queued
     auto& q = it->second;
     auto pos = std::find(q.rbegin(), q.rend(), r);
@@ -344,7 +422,7 @@ int Executor::revoke(int r) {
     if (q.empty()) visits_.erase(it);
   }
   t.path.resize(keep);
-  const Cell end = keep ? t.path.front() : t.cell;
+  const Cell end = keep ? t.path.front().cell : t.cell;
   std::vector<int> behind;
   auto it = visits_.find(end);
   if (it != visits_.end()) {
@@ -388,7 +466,7 @@ void Executor::resync() {
   }
   for (int r = 0; r < num_robots(); ++r) {
     const Track& t = tracks_[r];
-    if (t.active && t.dispatched) visits_[t.path.front()].push_back(r);
+    if (t.active && t.dispatched && t.path.front().cell != t.cell) visits_[t.path.front().cell].push_back(r);
   }
 }
 
@@ -398,8 +476,8 @@ int Executor::dispatch_ready(TickOutput& out, uint64_t stamp, const std::vector<
   for (int r = 0; r < num_robots(); ++r) {
     Track& t = tracks_[r];
     if (!t.active || t.health != RobotHealth::kOk || t.dispatched || t.path.empty() || on_hold(hold, r)) continue;
-    if (avoid && std::binary_search(avoid->begin(), avoid->end(), t.path.front())) continue;
-    auto it = visits_.find(t.path.front());
+    if (avoid && std::binary_search(avoid->begin(), avoid->end(), t.path.front().cell)) continue;
+    auto it = visits_.find(t.path.front().cell);  // a turn: r's own cell, where r is first
     if (it != visits_.end() && !it->second.empty() && it->second.front() == r) {
       t.dispatched = true;
       t.dispatched_at = stamp;
@@ -416,7 +494,8 @@ const gdrhcr::DistTable& Executor::dist_for(const std::vector<Cell>& obstacles) 
     obstacle_cells_ = obstacles;
     obstacle_dist_.reset();
     if (!obstacles.empty())
-      obstacle_dist_ = std::make_shared<const gdrhcr::DistTable>(grid_, obstacles, cfg_.dist_budget_bytes);
+      obstacle_dist_ =
+          std::make_shared<const gdrhcr::DistTable>(grid_, obstacles, cfg_.action_model, cfg_.dist_budget_bytes);
   }
   return obstacle_dist_ ? *obstacle_dist_ : dist_;
 }
@@ -428,8 +507,8 @@ std::vector<Cell> Executor::planner_goals(int r, const std::vector<Cell>& fleet_
   const Track& t = tracks_[r];
   if (fleet_goals.empty() || (fleet_goals.size() == 1 && fleet_goals[0] == t.cell)) return {end};
   size_t k = 0;
-  for (Cell c : t.path)
-    if (k + 1 < fleet_goals.size() && c == fleet_goals[k]) ++k;
+  for (const Pose& p : t.path)
+    if (k + 1 < fleet_goals.size() && p.cell == fleet_goals[k]) ++k;
   return std::vector<Cell>(fleet_goals.begin() + k, fleet_goals.end());
 }
 
@@ -489,6 +568,7 @@ void Executor::gather_agents(const std::vector<std::vector<Cell>>& goals, const 
   const std::vector<int>& robot_of = out.robot_of_agent = robot_of_agent_;
   const int na = static_cast<int>(robot_of.size());
   in.positions.assign(na, kNoCell);
+  if (rotation()) in.headings.assign(na, gdrhcr::kEast);
   in.immovable.assign(na, 0);
   out.agent_goals.assign(na, {});
   for (int a = 0; a < na; ++a) {
@@ -496,14 +576,16 @@ void Executor::gather_agents(const std::vector<std::vector<Cell>>& goals, const 
     const Track& t = tracks_[r];
     if (t.health != RobotHealth::kOk) {  // an obstacle at its cell, and wherever it may be entering
       in.positions[a] = t.cell;
+      if (rotation()) in.headings[a] = t.heading;
       in.immovable[a] = 1;
       in.obstacles.push_back(t.cell);
       add_blocked_cells(r, in.blocked);
       out.agent_goals[a] = {t.cell};
       continue;
     }
-    const Cell end = t.path.empty() ? t.cell : t.path.back();
+    const Cell end = t.path.empty() ? t.cell : t.path.back().cell;
     in.positions[a] = end;
+    if (rotation()) in.headings[a] = t.path.empty() ? t.heading : t.path.back().heading;
     // A robot with commit_horizon moves committed and not finished (the one it is making
     // included: a robot still on its way at the next tick is late) gets no further move in
     // this step; the others plan around its end state, so no commitments pile up behind a
@@ -533,6 +615,12 @@ std::vector<Cell> Executor::call_planner(StepInput& in, DeadlinePlanner& planner
   in.blocked.insert(in.blocked.end(), in.late_cells.begin(), in.late_cells.end());
 
   gdrhcr::WorldView world{grid_, dist, static_cast<int>(steps_), in.positions, out.agent_goals};
+  if (rotation()) {
+    world.action_model = cfg_.action_model;
+    world.headings = &in.headings;
+    in.next_headings = in.headings;
+    world.next_headings = &in.next_headings;
+  }
   if (std::any_of(in.immovable.begin(), in.immovable.end(), [](uint8_t v) { return v != 0; }))
     world.immovable = &in.immovable;
   // Blocked for the planner: the late and waiting robots' cells (one per robot, so no two alike)
@@ -550,25 +638,31 @@ std::vector<Cell> Executor::call_planner(StepInput& in, DeadlinePlanner& planner
   return next;
 }
 
-// Moves of immovable robots, into held or blocked cells, and around cycles become waits; a step
-// the validator rejects becomes a wait for everybody (out.plan_error). The rest is committed: each
-// moving robot's next cell is appended to its path and to the cell's queue of visits.
-void Executor::commit_step(const StepInput& in, std::vector<Cell>& next, TickOutput& out) {
+// Moves of immovable robots, into held or blocked cells, and around cycles become waits (a held
+// robot does not turn either); a step the validator rejects (in the action model in force) becomes
+// a wait for everybody (out.plan_error). The rest is committed: each robot's new pose is appended
+// to its path, and a new cell to the cell's queue of visits.
+void Executor::commit_step(StepInput& in, std::vector<Cell>& next, TickOutput& out) {
   const std::vector<Cell>& positions = in.positions;
   std::vector<uint8_t> held = in.immovable;
   hold_cascade(grid_, positions, next, held, in.blocked);
   if (hold_rotations(positions, next, held) > 0) hold_cascade(grid_, positions, next, held, in.blocked);
-  if (auto violation = validator_.check(positions, next)) {
+  const bool rot = rotation();
+  for (size_t a = 0; rot && a < held.size(); ++a)
+    if (held[a]) in.next_headings[a] = in.headings[a];
+  if (auto violation = validator_.check(positions, next, rot ? &in.headings : nullptr, rot ? &in.next_headings : nullptr)) {
     out.plan_error = violation->describe(grid_, static_cast<int>(steps_));
     next = positions;
+    in.next_headings = in.headings;
   }
   for (uint8_t h : held) out.held += h != 0;
   ++steps_;
   for (size_t a = 0; a < positions.size(); ++a) {
-    if (next[a] == positions[a]) continue;
+    const Pose to{next[a], rot ? in.next_headings[a] : gdrhcr::heading_of_move(grid_, positions[a], next[a])};
+    if (to.cell == positions[a] && (!rot || to.heading == in.headings[a])) continue;
     const int r = out.robot_of_agent[a];
-    tracks_[r].path.push_back(next[a]);
-    visits_[next[a]].push_back(r);
+    tracks_[r].path.push_back(to);
+    if (to.cell != positions[a]) visits_[to.cell].push_back(r);
   }
 }
 
@@ -593,6 +687,8 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
     return out;
   }
   out.command.assign(n, kNoCell);
+  out.command_heading.assign(n, kNoHeading);
+  out.headings.assign(n, kNoHeading);
   out.end_state.assign(n, kNoCell);
   reconcile(robots, out);
   dispatch_ready(out, ticks_, held);
@@ -610,9 +706,12 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
       continue;
     }
     out.cells[r] = t.cell;
+    out.headings[r] = t.heading;
     // On hold and at rest: told to stay; its commanded cell stays reserved for when it is released.
-    out.command[r] = on_hold(held, r) && !t.reported_moving && t.health != RobotHealth::kInconsistent ? t.cell : command(r);
-    out.end_state[r] = t.path.empty() ? t.cell : t.path.back();
+    const bool stay = on_hold(held, r) && !t.reported_moving && t.health != RobotHealth::kInconsistent;
+    out.command[r] = stay ? t.cell : command(r);
+    out.command_heading[r] = stay ? t.heading : command_heading(r);
+    out.end_state[r] = t.path.empty() ? t.cell : t.path.back().cell;
     if (t.health == RobotHealth::kOk && !t.dispatched && !t.path.empty() && !on_hold(held, r)) ++out.waiting;
   }
   return out;
@@ -626,7 +725,7 @@ std::string Executor::debug_queue(Cell c) const {
     const Track& t = tracks_[r];
     s += "robot " + std::to_string(r) + " at " + grid_.describe(t.cell) + " " + robot_health_name(t.health) +
          (t.dispatched ? " dispatched" : "") + " path";
-    for (Cell p : t.path) s += " " + grid_.describe(p);
+    for (const Pose& p : t.path) s += " " + grid_.describe(p.cell) + (rotation() ? gdrhcr::heading_name(p.heading) : "");
     s += "; ";
   }
   return s;
@@ -647,14 +746,18 @@ std::string Executor::check_invariants() const {
     auto it = visits_.find(t.cell);
     if (it == visits_.end() || it->second.empty() || it->second.front() != r)
       err = "robot " + std::to_string(r) + " is not first in the queue of its cell " + grid_.describe(t.cell);
-    Cell prev = t.cell;
-    for (Cell c : t.path) {
-      if (!grid_.step_allowed(prev, c) || c == prev)
-        err = "robot " + std::to_string(r) + " has a committed move " + grid_.describe(prev) + " -> " + grid_.describe(c);
-      auto q = visits_.find(c);
+    Pose prev{t.cell, t.heading};
+    for (const Pose& p : t.path) {
+      const bool ok = rotation() ? gdrhcr::action_between(grid_, prev, p).has_value() && p != prev
+                                 : grid_.step_allowed(prev.cell, p.cell) && p.cell != prev.cell;
+      if (!ok)
+        err = "robot " + std::to_string(r) + " has a committed move " + grid_.describe(prev.cell) + " -> " +
+              grid_.describe(p.cell) + (rotation() ? std::string(" ") + gdrhcr::heading_name(prev.heading) + " -> " +
+                                                         gdrhcr::heading_name(p.heading) : std::string());
+      auto q = visits_.find(p.cell);
       if (q == visits_.end() || std::find(q->second.begin(), q->second.end(), r) == q->second.end())
-        err = "robot " + std::to_string(r) + " has no visit queued for " + grid_.describe(c);
-      prev = c;
+        err = "robot " + std::to_string(r) + " has no visit queued for " + grid_.describe(p.cell);
+      prev = p;
     }
   }
   return err;

@@ -91,7 +91,7 @@ bool Fleet::cancel(uint64_t id, std::string& reason) {
 }
 
 bool Fleet::update_robot(int64_t id, int x, int y, bool offline, bool moving, std::string& error,
-                         double now, std::optional<std::pair<int, int>> entering) {
+                         double now, std::optional<std::pair<int, int>> entering, gdrhcr::Heading heading) {
   if (id < 0 || id >= num_robots()) {
     error = "unknown robot id " + std::to_string(id) + " (fleet has " + std::to_string(num_robots()) + " robots)";
     return false;
@@ -121,6 +121,7 @@ bool Fleet::update_robot(int64_t id, int x, int y, bool offline, bool moving, st
   r.silent = false;
   r.offline = offline;
   r.moving = moving;
+  r.heading = heading;
   r.last_report = now;
   return true;
 }

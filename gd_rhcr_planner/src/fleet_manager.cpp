@@ -42,6 +42,15 @@ void FleetConfig::validate() {
   parse_dispatch_policy(dispatcher);  // throws naming a bad value
   dispatch.validate();
   gdrhcr::planner_param_specs(planner);  // throws naming an unknown planner
+  model();                                // throws naming a bad action model
+}
+
+gdrhcr::ActionModel FleetConfig::model() const {
+  try {
+    return gdrhcr::parse_action_model(action_model);
+  } catch (const std::invalid_argument& e) {
+    throw gdrhcr::ParamError(std::string("~action_model: ") + e.what());
+  }
 }
 
 gdrhcr::Params live_planner_params(const std::string& planner, const LiveConfig& c) {
@@ -68,7 +77,7 @@ FleetManager::FleetManager(const gdrhcr::Grid& grid, FleetConfig cfg, Log sink)
   cfg_.validate();
   if (static_cast<size_t>(cfg_.num_robots) > grid_.free_cells().size())
     throw gdrhcr::ParamError("~num_robots exceeds the free cells of the map");
-  dist_ = std::make_unique<gdrhcr::DistTable>(grid_, size_t(cfg_.dist_budget_mb) << 20);
+  dist_ = std::make_unique<gdrhcr::DistTable>(grid_, cfg_.model(), size_t(cfg_.dist_budget_mb) << 20);
   // GD-RHCR returns within 90% of the plan deadline (groups it cannot solve in time go to its
   // secondary solver), so the fallback PIBT moves the whole fleet only when even that is late.
   auto_step_budget_ = gdrhcr::planner_has_param(cfg_.planner, "step-budget") && !cfg_.planner_params.has("step-budget");
@@ -89,13 +98,14 @@ FleetManager::FleetManager(const gdrhcr::Grid& grid, FleetConfig cfg, Log sink)
   if (values.has("solver")) live_.solver = values.text("solver");
   base_params_ = cfg_.planner_params;
   for (const char* n : kLiveNames) base_params_.erase(n);
-  planner_ = make_deadline_planner(gdrhcr::make_planner(values, grid_, cfg_.num_robots, cfg_.seed));
+  planner_ = make_deadline_planner(gdrhcr::make_planner(values, grid_, cfg_.num_robots, cfg_.seed, cfg_.model()));
   fleet_ = std::make_unique<Fleet>(grid_, *dist_, cfg_.num_robots);
   fleet_->set_auto_assign(false);  // the dispatcher assigns
   ExecutorConfig ec;
   ec.commit_horizon = cfg_.commit_horizon;
   ec.plan_deadline_s = cfg_.plan_deadline;
   ec.dist_budget_bytes = size_t(cfg_.dist_budget_mb) << 20;
+  ec.action_model = cfg_.model();
   executor_ = std::make_unique<Executor>(grid_, *dist_, cfg_.num_robots, ec);
   dispatcher_ = std::make_unique<Dispatcher>(parse_dispatch_policy(cfg_.dispatcher), cfg_.dispatch);
   if (cfg_.task_store.empty()) {
@@ -123,7 +133,7 @@ size_t FleetManager::prepare_distances(const std::vector<Cell>& cells) {
 std::unique_ptr<DeadlinePlanner> FleetManager::make_deadline_planner(std::unique_ptr<gdrhcr::Planner> primary) const {
   gdrhcr::Params none;
   return std::make_unique<DeadlinePlanner>(std::move(primary),
-                                           gdrhcr::make_planner("pibt", none, grid_, cfg_.num_robots, cfg_.seed));
+                                           gdrhcr::make_planner("pibt", none, grid_, cfg_.num_robots, cfg_.seed, cfg_.model()));
 }
 
 void FleetManager::log(LogLevel level, const std::string& msg) const {
@@ -171,9 +181,15 @@ int FleetManager::update_robots(const std::vector<RobotReport>& reports, double 
     else if (r.mode > kModeStopped) why = "robot " + std::to_string(r.id) + ": unknown mode " + std::to_string(r.mode);
     else if (known && r.stamp > 0 && r.stamp < last_stamp_[r.id])
       why = "robot " + std::to_string(r.id) + ": stamped before its last report (out of order)";
+    else if (r.heading != gdrhcr::kNoHeading && (r.heading < 0 || r.heading >= gdrhcr::kNumHeadings))
+      why = "robot " + std::to_string(r.id) + ": unknown heading " + std::to_string(r.heading + 1) +
+            " (RobotState.HEADING_* is 0..4)";
+    else if (r.heading == gdrhcr::kNoHeading && cfg_.model() == gdrhcr::ActionModel::kRotation && r.mode != kOffline)
+      why = "robot " + std::to_string(r.id) + " reports no heading (HEADING_NONE): ~action_model rotation needs it";
     else if (fleet_->update_robot(r.id, r.x, r.y, r.mode == kOffline, r.moving, why, now,
                                   r.entering_known ? std::make_optional(std::make_pair(r.entering_x, r.entering_y))
-                                                   : std::nullopt)) {
+                                                   : std::nullopt,
+                                  r.heading)) {
       if (r.stamp > 0) last_stamp_[r.id] = r.stamp;
       continue;
     }
@@ -319,7 +335,7 @@ std::vector<std::string> FleetManager::reconfigure(LiveConfig& c) {
       for (const char* n : kLiveNames)
         if (changes.has(n)) p.set(n, changes.get_string(n, ""));
       if (auto_step_budget_) p.set("step-budget", number(kStepBudgetShare * c.plan_deadline));
-      fresh = gdrhcr::make_planner(cfg_.planner, p, grid_, cfg_.num_robots, cfg_.seed);
+      fresh = gdrhcr::make_planner(cfg_.planner, p, grid_, cfg_.num_robots, cfg_.seed, cfg_.model());
     } catch (const std::exception& e) {
       errors.push_back(std::string("planner parameters rejected (") + e.what() + "); keeping " + live_string);
       c.V = live.V, c.H = live.H, c.c_soft = live.c_soft, c.K_threshold = live.K_threshold, c.solver = live.solver;
@@ -486,7 +502,7 @@ TickResult FleetManager::tick(double now, double wall, bool view) {
   std::vector<int> group_of;
   groups_of(exec, primary, out, group_of);
   count_outcome_locked(exec);
-  out.commands = commands_locked(exec.command);
+  out.commands = commands_locked(exec.command, exec.command_heading);
   stats_locked(exec, primary, steady_seconds() - t0, wall, out);
   if (view) view_locked(exec, primary, group_of, in.goals, out);
   return out;
@@ -501,17 +517,23 @@ std::vector<RobotCommand> FleetManager::between_ticks() {
   const std::vector<int> changed = executor_->advance(robots, &held);
   early_dispatches_ += changed.size();
   std::vector<Cell> command(fleet_->num_robots(), gdrhcr::kNoCell);
-  for (int r : changed) command[r] = executor_->command(r);
-  return commands_locked(command);
+  std::vector<gdrhcr::Heading> heading(fleet_->num_robots(), gdrhcr::kNoHeading);
+  for (int r : changed) command[r] = executor_->command(r), heading[r] = executor_->command_heading(r);
+  return commands_locked(command, heading);
 }
 
-// Every robot's command (a robot that never reported gets none).
-std::vector<RobotCommand> FleetManager::commands_locked(const std::vector<Cell>& command) const {
+// Every robot's command (a robot that never reported gets none), with what it does to follow it
+// from the pose the executor knows.
+std::vector<RobotCommand> FleetManager::commands_locked(const std::vector<Cell>& command,
+                                                        const std::vector<gdrhcr::Heading>& heading) const {
   std::vector<RobotCommand> out;
   for (size_t r = 0; r < command.size(); ++r) {
     if (command[r] == gdrhcr::kNoCell) continue;
     const int robot = static_cast<int>(r);
-    out.push_back({robot, command[r], operator_.mode(robot, fleet_->command_mode(robot)), fleet_->task_of(robot)});
+    RobotCommand c{robot, command[r], operator_.mode(robot, fleet_->command_mode(robot)), fleet_->task_of(robot),
+                   heading[r]};
+    c.action = command_action({executor_->cell(robot), executor_->heading(robot)}, c.cell, c.heading);
+    out.push_back(c);
   }
   return out;
 }
@@ -635,6 +657,7 @@ void FleetManager::view_locked(const TickOutput& exec, const gdrhcr::Planner* pr
   FleetView& v = out.view;
   const size_t n = exec.cells.size();
   v.pos = exec.cells;
+  v.heading = exec.headings;
   v.next = exec.command;
   v.group_of = group_of;
   v.paths.assign(n, {});
@@ -686,6 +709,7 @@ Health FleetManager::diagnose(double wall, std::vector<std::pair<std::string, st
   add("planner", cfg_.planner);
   add("planner config", config_string_locked(live_));
   add("dispatcher", dispatch_policy_name(dispatcher_->policy()));
+  add("action model", gdrhcr::action_model_name(cfg_.model()));
   add("operator", operator_.summary());
   add_i("tick", tick_);
   add_n("tick rate target (Hz)", cfg_.tick_rate);
@@ -747,7 +771,7 @@ const std::vector<std::string>& node_param_names() {
       "map", "planner", "frame_id", "cell_size", "tick_rate", "num_robots", "seed", "per_robot_topics",
       "publish_markers", "label_limit", "dist_budget_mb", "plan_deadline", "offline_timeout", "commit_horizon",
       "dispatch_rate", "show_goal_lines", "dispatcher", "dispatch_finish_horizon", "dispatch_switch_margin",
-      "dispatch_max_tasks", "dispatch_age_weight", "task_store", "planner_params"};
+      "dispatch_max_tasks", "dispatch_age_weight", "task_store", "planner_params", "action_model"};
   return names;
 }
 

@@ -109,7 +109,8 @@ visualization_msgs::MarkerArray FleetMarkers::update(const FleetView& v) {
   return changes(std::move(all));
 }
 
-// Robots: a triangle per robot pointing along its heading (the move it makes, else its last).
+// Robots: a triangle per robot pointing along its heading: the one it reports (issue 23), else
+// the move it makes, else its last move.
 void FleetMarkers::robots_layer(const FleetView& v, std::vector<Marker>& all) {
   const double res = frame_.resolution;
   const size_t n = v.pos.size();
@@ -117,7 +118,9 @@ void FleetMarkers::robots_layer(const FleetView& v, std::vector<Marker>& all) {
   auto robots = base("robots", Marker::TRIANGLE_LIST);
   for (size_t r = 0; r < n; ++r) {
     auto p = point(v.pos[r], 0.3 * res);
-    if (r < v.next.size() && v.next[r] != v.pos[r] && v.next[r] != gdrhcr::kNoCell) {
+    if (r < v.heading.size() && v.heading[r] != gdrhcr::kNoHeading) {
+      heading_[r] = heading_yaw(v.heading[r]);
+    } else if (r < v.next.size() && v.next[r] != v.pos[r] && v.next[r] != gdrhcr::kNoCell) {
       auto q = point(v.next[r], 0.3 * res);
       heading_[r] = std::atan2(q.y - p.y, q.x - p.x);
     }

@@ -106,6 +106,7 @@ FleetConfig PlannerNode::load_config() {
   if (!pnh_.getParam("map", map_path_) || map_path_.empty())
     throw gdrhcr::ParamError("parameter ~map (path of a .map, kiva .map or map_server .yaml) is required");
   pnh_.param("planner", c.planner, std::string("gd-rhcr"));
+  pnh_.param("action_model", c.action_model, c.action_model);
   pnh_.param("frame_id", frame_id_, std::string("map"));
   pnh_.param("cell_size", cell_size_, 1.0);
   pnh_.param("tick_rate", c.tick_rate, c.tick_rate);

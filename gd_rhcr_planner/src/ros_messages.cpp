@@ -32,6 +32,24 @@ void ros_log(LogLevel level, const std::string& msg) {
   }
 }
 
+gdrhcr::Heading heading_of_message(uint8_t h) {
+  return h == gd_rhcr_msgs::RobotState::HEADING_NONE ? gdrhcr::kNoHeading : static_cast<gdrhcr::Heading>(h - 1);
+}
+
+uint8_t heading_message(gdrhcr::Heading h) {
+  return h == gdrhcr::kNoHeading ? gd_rhcr_msgs::RobotState::HEADING_NONE : static_cast<uint8_t>(h + 1);
+}
+
+uint8_t action_message(gdrhcr::Action a) {
+  switch (a) {
+    case gdrhcr::Action::kForward: return gd_rhcr_msgs::StepCommand::ACTION_FORWARD;
+    case gdrhcr::Action::kClockwise: return gd_rhcr_msgs::StepCommand::ACTION_ROTATE_CW;
+    case gdrhcr::Action::kCounterClockwise: return gd_rhcr_msgs::StepCommand::ACTION_ROTATE_CCW;
+    case gdrhcr::Action::kWait: break;
+  }
+  return gd_rhcr_msgs::StepCommand::ACTION_WAIT;
+}
+
 std::vector<RobotReport> robot_reports(const gd_rhcr_msgs::RobotStateArray& msg) {
   std::vector<RobotReport> out;
   out.reserve(msg.robots.size());
@@ -41,6 +59,7 @@ std::vector<RobotReport> robot_reports(const gd_rhcr_msgs::RobotStateArray& msg)
     RobotReport r;
     r.id = s.id, r.x = s.x, r.y = s.y, r.mode = s.mode, r.moving = s.moving, r.stamp = stamp;
     r.entering_known = s.entering_known, r.entering_x = s.entering_x, r.entering_y = s.entering_y;
+    r.heading = heading_of_message(s.heading);  // > HEADING_NORTH: out of range, refused by the manager
     r.pose_finite = std::isfinite(p.position.x) && std::isfinite(p.position.y) && std::isfinite(p.position.z) &&
                     std::isfinite(p.orientation.x) && std::isfinite(p.orientation.y) &&
                     std::isfinite(p.orientation.z) && std::isfinite(p.orientation.w);
@@ -100,7 +119,11 @@ gd_rhcr_msgs::StepCommandArray step_commands(const std::vector<RobotCommand>& co
     c.robot_id = rc.robot, c.tick = tick, c.next_x = grid.x_of(rc.cell), c.next_y = grid.y_of(rc.cell);
     c.target_pose.position.x = map.frame.world_x(c.next_x);
     c.target_pose.position.y = map.frame.world_y(c.next_y);
-    c.target_pose.orientation.w = 1.0;
+    c.next_heading = heading_message(rc.heading);
+    const double yaw = rc.heading == gdrhcr::kNoHeading ? 0.0 : heading_yaw(rc.heading);
+    c.target_pose.orientation.z = std::sin(yaw / 2);
+    c.target_pose.orientation.w = std::cos(yaw / 2);
+    c.action = action_message(rc.action);
     c.mode = rc.mode, c.task_id = rc.task;
     cmds.commands.push_back(c);
   }

@@ -734,3 +734,205 @@ TEST(ExecutorAdg, SlipsFaultsAndRestartsWithTwoMovesAheadAndDispatchOnArrival) {
     }
   }
 }
+
+// ---------------------------------------------------------------------------------------------
+// Turning robots (issue 23): the rotation action model, and mapf plans executed by robots that
+// turn.
+
+namespace {
+
+RobotRecord facing(const Grid& g, int x, int y, gdrhcr::Heading h, bool moving = false) {
+  RobotRecord r = at(g, x, y, moving);
+  r.heading = h;
+  return r;
+}
+
+std::unique_ptr<DeadlinePlanner> make_fn_planner_rotation(const Grid& g, int n, FnPlanner** out) {
+  auto p = std::make_unique<FnPlanner>();
+  *out = p.get();
+  gdrhcr::Params none;
+  return std::make_unique<DeadlinePlanner>(std::move(p),
+                                           gdrhcr::make_planner("pibt", none, g, n, 1, gdrhcr::ActionModel::kRotation));
+}
+
+struct TurnResult {
+  int goals_tail = 0, turns = 0, turns_before_moves = 0;
+};
+
+// run_fleet's loop with turning robots (DelayedFleet::give_headings: a quarter turn takes a move's
+// time): `model` is the planner's and the executor's. In the rotation model a robot must never be
+// sent forward into a cell it does not face (DelayedFleet reports it as a bad command).
+TurnResult run_turning(gdrhcr::ActionModel model, const std::string& planner_name, int n, uint64_t seed, int ticks,
+                       int tail, double p_delay, bool between) {
+  const Grid& g = small_warehouse();
+  gdrhcr::DistTable dist(g, model);
+  gdrhcr::Params params, none;
+  if (planner_name == "gd-rhcr") params.set("timeout", "1"), params.set("node-budget", "2000");
+  ExecutorConfig cfg;
+  cfg.commit_horizon = 2;
+  cfg.action_model = model;
+  DeadlinePlanner planner(gdrhcr::make_planner(planner_name, params, g, n, seed, model),
+                          gdrhcr::make_planner("pibt", none, g, n, seed, model));
+  Executor ex(g, dist, n, cfg);
+  DelayedFleet sim(g, n, seed);
+  sim.give_headings(model == gdrhcr::ActionModel::kRotation);
+  DelayedFleet::Between on_arrival = [&](const std::vector<RobotRecord>& reports) {
+    auto cmds = DelayedFleet::on_arrival(ex)(reports);
+    EXPECT_EQ(ex.check_invariants(), "");
+    return cmds;
+  };
+  TurnResult res;
+  for (int t = 0; t < ticks + tail; ++t) {
+    int reached = 0;
+    auto goals = sim.goals(reached);
+    if (t >= ticks) res.goals_tail += reached;
+    auto out = ex.tick(sim.records(), goals, planner, true);
+    EXPECT_TRUE(out.stepped) << out.skip_reason;
+    EXPECT_EQ(out.plan_error, "") << "seed " << seed << " tick " << t;
+    EXPECT_EQ(ex.check_invariants(), "") << "seed " << seed << " tick " << t;
+    const std::string bad = sim.execute(out, t < ticks ? p_delay : 0.0, 20, between ? on_arrival : nullptr);
+    if (!bad.empty() || ::testing::Test::HasFailure()) {
+      ADD_FAILURE() << bad << " (" << planner_name << " " << gdrhcr::action_model_name(model) << " seed " << seed
+                    << " tick " << t << ")";
+      return res;
+    }
+  }
+  for (const SimRobot& s : sim.robots()) res.turns += s.turns, res.turns_before_moves += s.turns_before_moves;
+  return res;
+}
+
+}  // namespace
+
+// Robot 0 turns in (1,0) before it goes on east; robot 1 is to follow it into (1,0). The turn is
+// commanded at once and is late: robot 0's cell stays its own (robot 1's move into it is held,
+// robot 1 is not sent there), robot 0's forward move is sent only once it reports the new heading,
+// and robot 1's move into (1,0), committed while robot 0 leaves it, is sent only once robot 0 has
+// arrived in (2,0).
+TEST(ExecutorRotation, ATurningRobotKeepsItsCellAndMovesForwardOnlyOnceTurned) {
+  const Grid g = Grid::from_rows({"....."});
+  gdrhcr::DistTable dist(g, gdrhcr::ActionModel::kRotation);
+  FnPlanner* fn;
+  auto planner = make_fn_planner_rotation(g, 2, &fn);
+  ExecutorConfig cfg;
+  cfg.action_model = gdrhcr::ActionModel::kRotation;
+  cfg.commit_horizon = 3;
+  Executor ex(g, dist, 2, cfg);
+  std::vector<RobotRecord> robots{facing(g, 1, 0, gdrhcr::kNorth), facing(g, 0, 0, gdrhcr::kEast)};
+  int step = 0;
+  fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
+    ASSERT_TRUE(w.rotation());
+    if (step == 0) (*w.next_headings)[0] = gdrhcr::kEast;  // a quarter turn clockwise
+    if (step == 1) {
+      EXPECT_EQ((*w.headings)[0], gdrhcr::kEast) << "planned from the committed heading";
+      next[0] = g.cell(2, 0);
+      next[1] = g.cell(1, 0);  // follows robot 0 out of (1,0), whose turn is late: held
+    }
+    if (step >= 2 && w.positions[1] == g.cell(0, 0)) next[1] = g.cell(1, 0);
+    ++step;
+  };
+  auto out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.command[0], g.cell(1, 0));
+  EXPECT_EQ(out.command_heading[0], gdrhcr::kEast);
+  EXPECT_EQ(command_action({ex.cell(0), ex.heading(0)}, out.command[0], out.command_heading[0]),
+            gdrhcr::Action::kClockwise);
+  out = ex.tick(robots, stay_goals(robots), *planner, false);  // robot 0 still faces north: late
+  EXPECT_EQ(out.plan_error, "");
+  EXPECT_EQ(out.held, 1) << "robot 1's move into the cell robot 0 turns in was not held";
+  EXPECT_EQ(out.command[0], g.cell(1, 0));
+  EXPECT_EQ(out.command_heading[0], gdrhcr::kEast);
+  EXPECT_EQ(out.command[1], g.cell(0, 0));
+  EXPECT_EQ(ex.committed(0), (std::vector<Cell>{g.cell(1, 0), g.cell(2, 0)}));
+  EXPECT_TRUE(ex.committed(1).empty());
+  EXPECT_EQ(ex.check_invariants(), "");
+  EXPECT_TRUE(ex.advance(robots).empty()) << "a forward move was sent before the turn was done";
+  robots[0].heading = gdrhcr::kEast;  // the turn is done: its forward move goes at once
+  EXPECT_EQ(ex.advance(robots), std::vector<int>{0});
+  EXPECT_EQ(ex.command(0), g.cell(2, 0));
+  EXPECT_EQ(ex.command_heading(0), gdrhcr::kEast);
+  EXPECT_EQ(command_action({ex.cell(0), ex.heading(0)}, ex.command(0), ex.command_heading(0)), gdrhcr::Action::kForward);
+  robots[0].moving = true;
+  out = ex.tick(robots, stay_goals(robots), *planner, false);  // robot 1's follow move is committed, waits
+  EXPECT_EQ(ex.committed(1), std::vector<Cell>{g.cell(1, 0)});
+  EXPECT_EQ(out.command[1], g.cell(0, 0));
+  EXPECT_EQ(out.waiting, 1);
+  EXPECT_TRUE(ex.advance(robots).empty());
+  robots[0] = facing(g, 2, 0, gdrhcr::kEast);  // arrived: now robot 1 may enter (1,0)
+  EXPECT_EQ(ex.advance(robots), std::vector<int>{1});
+  EXPECT_EQ(ex.command(1), g.cell(1, 0));
+  EXPECT_EQ(ex.check_invariants(), "");
+}
+
+// A heading nobody commanded is believed: the robot's undispatched commitments are dropped and it
+// is planned from its real pose; a report without a heading makes it an obstacle.
+TEST(ExecutorRotation, AHeadingNobodyCommandedIsReplannedFromThere) {
+  const Grid g = Grid::from_rows({"....."});
+  gdrhcr::DistTable dist(g, gdrhcr::ActionModel::kRotation);
+  FnPlanner* fn;
+  auto planner = make_fn_planner_rotation(g, 1, &fn);
+  ExecutorConfig cfg;
+  cfg.action_model = gdrhcr::ActionModel::kRotation;
+  cfg.commit_horizon = 3;
+  Executor ex(g, dist, 1, cfg);
+  std::vector<RobotRecord> robots{facing(g, 2, 0, gdrhcr::kEast)};
+  std::vector<gdrhcr::Heading> seen;
+  fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
+    seen.push_back((*w.headings)[0]);
+    next[0] = w.positions[0];
+  };
+  auto out = ex.tick(robots, stay_goals(robots), *planner, false);
+  robots[0].heading = gdrhcr::kWest;  // turned on its own (a half turn)
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.resyncs, 1);
+  EXPECT_EQ(out.health[0], RobotHealth::kOk);
+  EXPECT_EQ(seen.back(), gdrhcr::kWest);
+  EXPECT_EQ(out.command_heading[0], gdrhcr::kWest);
+  robots[0].heading = gdrhcr::kNoHeading;
+  out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.health[0], RobotHealth::kInconsistent);
+  ASSERT_FALSE(out.warnings.empty());
+  EXPECT_NE(out.warnings.back().find("no heading"), std::string::npos) << out.warnings.back();
+}
+
+// A distance table in another action model than the robots' is refused, naming both.
+TEST(ExecutorRotation, ADistanceTableInAnotherModelIsRefused) {
+  const Grid g = Grid::from_rows({"..."});
+  gdrhcr::DistTable dist(g);
+  ExecutorConfig cfg;
+  cfg.action_model = gdrhcr::ActionModel::kRotation;
+  try {
+    Executor ex(g, dist, 1, cfg);
+    FAIL() << "accepted a mapf table for rotation robots";
+  } catch (const gdrhcr::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("mapf"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("rotation"), std::string::npos) << e.what();
+  }
+}
+
+// The rotation model under random delays with robots that take a move's time per quarter turn:
+// PIBT and GD-RHCR plan with turns, moves are dispatched on arrival, no two robots ever share a
+// cell, no robot is sent into a cell it does not face, robots turn, and after the delays stop the
+// fleet reaches goals again.
+TEST(ExecutorRotation, DelayedTurningRobotsNeverCollideNorDeadlock) {
+  for (uint64_t seed = 1; seed <= seeds(6); ++seed) {
+    for (const char* planner : {"pibt", "gd-rhcr"}) {
+      if (std::string(planner) == "gd-rhcr" && seed > 3) continue;
+      const TurnResult r = run_turning(gdrhcr::ActionModel::kRotation, planner, 24, seed, 120, 60, 0.05, true);
+      if (HasFailure()) return;
+      EXPECT_GT(r.goals_tail, 0) << planner << " seed " << seed;
+      EXPECT_GT(r.turns, 0) << planner << " seed " << seed;
+      EXPECT_EQ(r.turns_before_moves, 0) << planner << " seed " << seed;
+    }
+  }
+}
+
+// Mapf plans executed by turning robots: a move's command carries its heading, the robot turns
+// before it moves (and, waiting for its next committed move, turns towards it meanwhile); no
+// collision, no deadlock.
+TEST(ExecutorRotation, MapfPlansExecutedByTurningRobots) {
+  for (uint64_t seed = 1; seed <= seeds(4); ++seed) {
+    const TurnResult r = run_turning(gdrhcr::ActionModel::kMapf, "pibt", 24, seed, 120, 60, 0.05, true);
+    if (HasFailure()) return;
+    EXPECT_GT(r.goals_tail, 0) << "seed " << seed;
+    EXPECT_GT(r.turns, 0) << "seed " << seed;
+  }
+}

@@ -7,6 +7,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -372,4 +373,97 @@ TEST(FleetManager, ARestartedPlannerKeepsARobotThatDoesNotReportWhereItWasLastKn
   EXPECT_TRUE(after.tasks(false).empty()) << "and delivered";
   std::remove(path.c_str());
   std::remove((path + ".robots").c_str());
+}
+
+// Turning robots (issue 23): with ~action_model rotation every planner plans with turns; robots
+// that make their commands at once (a quarter turn or a forward move per tick) report their
+// headings. Every command is one rotation action from the pose the robot reports: a forward move
+// only into the cell it faces, a turn in place by a quarter; nobody is sent into another robot's
+// cell; robots turn, and tasks are delivered.
+TEST(FleetManager, RotationTicksTurnRobotsAndDeliverTasks) {
+  const Grid g = warehouse();
+  for (const char* planner : {"pibt", "gd-rhcr", "rhcr"}) {
+    FleetConfig cfg = config(planner, 4);
+    cfg.action_model = "rotation";
+    FleetManager fm(g, cfg);
+    std::vector<gdrhcr::Pose> pose{{g.cell(0, 0), gdrhcr::kEast}, {g.cell(11, 0), gdrhcr::kSouth},
+                                   {g.cell(0, 4), gdrhcr::kNorth}, {g.cell(11, 4), gdrhcr::kWest}};
+    for (int k = 0; k < 6; ++k)
+      ASSERT_TRUE(fm.submit({k % 12, 2, (11 - 2 * k) % 12, (k % 2) * 4, 0, 0}).accepted) << planner;
+    double now = 0;
+    int turns = 0, forwards = 0;
+    auto report = [&] {
+      std::vector<RobotReport> reports;
+      for (size_t r = 0; r < pose.size(); ++r) {
+        RobotReport rep;
+        rep.id = static_cast<int64_t>(r), rep.x = g.x_of(pose[r].cell), rep.y = g.y_of(pose[r].cell);
+        rep.heading = pose[r].heading;
+        reports.push_back(rep);
+      }
+      std::string err;
+      ASSERT_EQ(fm.update_robots(reports, now, err), 0) << err;
+    };
+    auto follow = [&](const std::vector<RobotCommand>& commands) {
+      for (const RobotCommand& c : commands) {
+        const gdrhcr::Pose to{c.cell, c.heading};
+        const auto action = gdrhcr::action_between(g, pose[c.robot], to);
+        ASSERT_TRUE(action.has_value()) << planner << ": robot " << c.robot << " commanded " << g.describe(c.cell)
+                                        << gdrhcr::heading_name(c.heading) << " from " << g.describe(pose[c.robot].cell)
+                                        << gdrhcr::heading_name(pose[c.robot].heading);
+        EXPECT_EQ(*action, c.action);
+        for (size_t o = 0; o < pose.size(); ++o)
+          EXPECT_FALSE(o != static_cast<size_t>(c.robot) && pose[o].cell == c.cell) << "sent into robot " << o;
+        turns += *action == gdrhcr::Action::kClockwise || *action == gdrhcr::Action::kCounterClockwise;
+        forwards += *action == gdrhcr::Action::kForward;
+      }
+      for (const RobotCommand& c : commands) pose[c.robot] = {c.cell, c.heading};
+    };
+    uint64_t delivered = 0;
+    for (int t = 0; t < 150; ++t) {
+      now += 0.001;
+      report();
+      TickResult r = fm.tick(now, now, t % 10 == 0);
+      ASSERT_TRUE(r.stepped) << planner << " tick " << t << ": " << r.skip_reason;
+      if (t % 10 == 0) {
+        ASSERT_EQ(r.view.heading.size(), 4u);
+        for (size_t i = 0; i < 4; ++i) EXPECT_EQ(r.view.heading[i], pose[i].heading);
+      }
+      follow(r.commands);
+      report();
+      follow(fm.between_ticks());
+      delivered = r.stats.tasks_delivered;
+    }
+    EXPECT_GT(turns, 0) << planner;
+    EXPECT_GT(forwards, 0) << planner;
+    EXPECT_GE(delivered, 3u) << planner;
+    std::vector<std::pair<std::string, std::string>> diag;
+    fm.diagnose(now, diag);
+    EXPECT_NE(std::find(diag.begin(), diag.end(), std::make_pair(std::string("action model"), std::string("rotation"))),
+              diag.end());
+  }
+}
+
+// A bad ~action_model stops the manager with an error naming it; in the rotation model a robot
+// that reports no heading is ignored with a reason saying so.
+TEST(FleetManager, ActionModelIsCheckedAndRotationNeedsHeadings) {
+  const Grid g = warehouse();
+  FleetConfig bad = config("pibt", 2);
+  bad.action_model = "diagonal";
+  try {
+    FleetManager fm(g, bad);
+    FAIL() << "accepted ~action_model diagonal";
+  } catch (const gdrhcr::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("~action_model"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("diagonal"), std::string::npos) << e.what();
+  }
+  FleetConfig cfg = config("pibt", 2);
+  cfg.action_model = "rotation";
+  FleetManager fm(g, cfg);
+  std::string err;
+  EXPECT_FALSE(fm.update_robot(0, 0, 0, false, false, 0.1, err));
+  EXPECT_NE(err.find("no heading"), std::string::npos) << err;
+  RobotReport rep;
+  rep.id = 1, rep.heading = 7;
+  EXPECT_EQ(fm.update_robots({rep}, 0.1, err), 1);
+  EXPECT_NE(err.find("unknown heading"), std::string::npos) << err;
 }

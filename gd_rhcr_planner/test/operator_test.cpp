@@ -2,6 +2,8 @@
 // throughput meter and the rviz markers builder (issue 14). No ROS master needed.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "gd_rhcr_planner/fleet_markers.hpp"
 #include "gd_rhcr_planner/fleet_stats.hpp"
 #include "gd_rhcr_planner/health.hpp"
@@ -196,6 +198,21 @@ TEST(RosMessages, MapCommandsAndLiveParametersConvert) {
   EXPECT_DOUBLE_EQ(cmds.commands[0].target_pose.position.x, 5.5);
   EXPECT_DOUBLE_EQ(cmds.commands[0].target_pose.position.y, 2.5) << "row 0 is the top, furthest from the origin";
   EXPECT_EQ(cmds.commands[0].task_id, 7);
+  EXPECT_EQ(cmds.commands[0].next_heading, gd_rhcr_msgs::RobotState::HEADING_NONE) << "mapf default: any heading";
+  EXPECT_EQ(cmds.commands[0].action, gd_rhcr_msgs::StepCommand::ACTION_WAIT);
+  // Headings (issue 23): north is the row above (y - 1 in cells), +y in metres: yaw +pi/2.
+  RobotCommand turn{1, map.grid.cell(5, 0), kToPickup, 7, gdrhcr::kNorth, gdrhcr::Action::kCounterClockwise};
+  const auto north = step_commands({turn}, map, "map", 3, 0.5, ros::Time(2.0)).commands.at(0);
+  EXPECT_EQ(north.next_heading, gd_rhcr_msgs::RobotState::HEADING_NORTH);
+  EXPECT_EQ(north.action, gd_rhcr_msgs::StepCommand::ACTION_ROTATE_CCW);
+  EXPECT_NEAR(2 * std::atan2(north.target_pose.orientation.z, north.target_pose.orientation.w), M_PI / 2, 1e-9);
+  turn.heading = gdrhcr::kSouth;
+  const auto south = step_commands({turn}, map, "map", 3, 0.5, ros::Time(2.0)).commands.at(0);
+  EXPECT_NEAR(2 * std::atan2(south.target_pose.orientation.z, south.target_pose.orientation.w), -M_PI / 2, 1e-9);
+  for (uint8_t h = 0; h <= 4; ++h) EXPECT_EQ(heading_message(heading_of_message(h)), h);
+  EXPECT_EQ(heading_of_message(gd_rhcr_msgs::RobotState::HEADING_EAST), gdrhcr::kEast);
+  EXPECT_EQ(heading_of_message(gd_rhcr_msgs::RobotState::HEADING_SOUTH), gdrhcr::kSouth);
+  EXPECT_EQ(heading_of_message(gd_rhcr_msgs::RobotState::HEADING_NONE), gdrhcr::kNoHeading);
   PlannerConfig pc = PlannerConfig::__getDefault__();
   LiveConfig l = live_of(pc);
   l.V = 4;

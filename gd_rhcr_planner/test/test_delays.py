@@ -7,6 +7,9 @@ counts no collision, no swap and no move its interlock would have stopped (and d
 the absent robot gets no command while the others keep moving and deliver at least ~deliveries
 tasks, every accepted task is delivered or still open in list_tasks (none lost), and moves were
 also sent between ticks (step_command_updates: the moment the robots ahead had left).
+With ~action_model rotation (rotation_integration.test, issue 23: robots that take a tick per
+quarter turn): every robot reports a heading, robots did turn, every command carries a heading,
+and no robot was ever sent into a cell it did not face (fleet_sim never turned before a move).
 """
 import threading
 import time
@@ -16,7 +19,7 @@ import rospy
 import rostest
 from diagnostic_msgs.msg import DiagnosticArray
 
-from gd_rhcr_msgs.msg import RobotStateArray, StepCommandArray, TaskStatus
+from gd_rhcr_msgs.msg import RobotState, RobotStateArray, StepCommandArray, TaskStatus
 from gd_rhcr_msgs.srv import ListTasks
 
 PKG = "gd_rhcr_planner"
@@ -34,6 +37,8 @@ class DelaysTest(unittest.TestCase):
         self.accepted = set()
         self.finished = {}
         self.sim = {}
+        self.no_heading = []  # reports or commands without a heading (rotation)
+        self.rotation = rospy.get_param("~action_model", "mapf") == "rotation"
         rospy.Subscriber("robot_states", RobotStateArray, self.on_states, queue_size=100)
         rospy.Subscriber("step_commands", StepCommandArray, self.on_steps, queue_size=100)
         rospy.Subscriber("step_command_updates", StepCommandArray, self.on_updates, queue_size=100)
@@ -43,6 +48,9 @@ class DelaysTest(unittest.TestCase):
     def on_states(self, msg):
         cells = {r.id: (r.x, r.y) for r in msg.robots}
         with self.lock:
+            if self.rotation:
+                self.no_heading += ["robot %d reports heading %d" % (r.id, r.heading) for r in msg.robots
+                                    if not RobotState.HEADING_EAST <= r.heading <= RobotState.HEADING_NORTH]
             if len(set(cells.values())) != len(cells):
                 self.violations.append("shared cell in %s" % sorted(cells.items()))
             if self.prev is not None:
@@ -64,6 +72,8 @@ class DelaysTest(unittest.TestCase):
             self.steps += 1
             for c in msg.commands:
                 self.commanded.add(c.robot_id)
+                if self.rotation and c.next_heading == RobotState.HEADING_NONE:
+                    self.no_heading.append("command to robot %d without a heading" % c.robot_id)
 
     def on_updates(self, msg):
         with self.lock:
@@ -123,8 +133,13 @@ class DelaysTest(unittest.TestCase):
             self.assertGreaterEqual(len(delivered), want)
             lost = sorted(t for t in accepted if t not in self.finished and t not in open_ids)
             self.assertEqual(lost, [], "accepted tasks neither finished nor open")
+            if self.rotation:
+                self.assertEqual(self.no_heading[:5], [])
+                self.assertGreater(int(self.sim.get("turns", 0)), 10, "robots did not turn")
+                self.assertEqual(int(self.sim.get("turns before moves", -1)), 0,
+                                 "a robot was sent forward into a cell it did not face")
 
 
 if __name__ == "__main__":
     rospy.init_node("test_delays")
-    rostest.rosrun(PKG, "delays_integration", DelaysTest)
+    rostest.rosrun(PKG, rospy.get_param("~test_name", "delays_integration"), DelaysTest)

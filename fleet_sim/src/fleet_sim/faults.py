@@ -130,7 +130,8 @@ def slip_target(cell, target, is_free, claimed):
 class RandomDelays(object):
     """Random delays as in the League of Robot Runners 2026: on every tick a robot that is not
     delayed starts a delay with probability `p`, lasting a uniform 1..`max_ticks` tick periods.
-    Robots are objects with `delay_until` (s), `moving` and `duration` (s, of the move under way):
+    Robots are objects with `delay_until` (s), `moving`, `turning` (optional) and `duration` (s,
+    of the move or turn under way):
     a robot at rest stays put until `delay_until`; a moving robot stops where it is and arrives
     that much later (its `duration` grows by the delay). Seeded, so a seed fixes the pattern."""
 
@@ -152,7 +153,7 @@ class RandomDelays(object):
                 continue
             length = self.rng.randint(1, self.max_ticks) * period
             r.delay_until = now + length
-            if r.moving:
+            if r.moving or getattr(r, "turning", False):  # a turn under way is stopped too
                 r.duration += length
             n += 1
         self.started += n

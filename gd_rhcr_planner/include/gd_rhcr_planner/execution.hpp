@@ -33,6 +33,18 @@
 // bad or late robot is an immovable agent), so the planner's per-agent state (PIBT priorities,
 // GD-RHCR's cached plans) stays with its robot; a robot with no known cell yet is no agent
 // (nothing can be planned for it) and joins with the next free index.
+//
+// Turning robots (issue 23). In the rotation action model (ExecutorConfig::action_model; LoRR's
+// MAPF_T, gdrhcr/action_model.hpp) a robot's state is a pose, its cell and heading, and its
+// commitments are poses: a move forward into the neighbour it faces (a visit of that cell, queued
+// as above) or a quarter turn in place (no visit: the robot stays first in its own cell's queue,
+// so the cell stays reserved for it while it turns, and is left only by a forward move). A turn
+// is dispatched as soon as it is the robot's next commitment and is done when the robot reports
+// the new heading at rest; a heading nobody commanded is believed (the robot is replanned from
+// there). Every planned step is validated as rotation actions. In the mapf model headings are
+// not planned; the commands still carry each move's heading, and a robot that reports a heading
+// and waits for its next committed move is told to turn towards it in place meanwhile, so a
+// turning robot loses no time on turns while it waits (what a real fleet's executor does).
 #pragma once
 
 #include <cstdint>
@@ -44,6 +56,7 @@
 
 #include "gd_rhcr_planner/deadline_planner.hpp"
 #include "gd_rhcr_planner/fleet.hpp"
+#include "gdrhcr/action_model.hpp"
 #include "gdrhcr/dist_table.hpp"
 #include "gdrhcr/grid.hpp"
 #include "gdrhcr/validator.hpp"
@@ -60,6 +73,9 @@ struct ExecutorConfig {
   // A late robot's undispatched moves and those of the robots waiting to enter its cell are
   // taken back (transitively) and planned again around it, instead of queueing behind it.
   bool revoke_behind_late = true;
+  // The robots' action model: kMapf (moves to any neighbour) or kRotation (forward, quarter turns;
+  // the planner and the distance table must plan in it too).
+  gdrhcr::ActionModel action_model = gdrhcr::ActionModel::kMapf;
 };
 
 struct TickOutput {
@@ -67,6 +83,8 @@ struct TickOutput {
   std::string skip_reason;
   std::vector<Cell> cells;       // per robot id: its cell as the executor knows it (kNoCell: missing)
   std::vector<Cell> command;     // per robot id: the cell to be in or head for (kNoCell: no command)
+  std::vector<gdrhcr::Heading> command_heading;  // per robot id: the heading to face there (kNoHeading: any)
+  std::vector<gdrhcr::Heading> headings;  // per robot id: its heading as the executor knows it (kNoHeading: none)
   std::vector<Cell> end_state;   // per robot id: the end of its commitments
   std::vector<RobotHealth> health;
   std::vector<int> robot_of_agent;  // planner agent index -> robot id (the placed robots; indices never change)
@@ -108,6 +126,10 @@ class Executor {
   // robot is told to stay in the cell it reports (not sent on to a cell that may not be next to
   // it); one moving where the executor cannot tell gets no command (kNoCell).
   Cell command(int r) const;
+  // The heading robot r is to face in command(r): a dispatched pose's, in the mapf model the
+  // heading of its next committed move while it waits for it (it turns in place meanwhile), else
+  // its own (kNoHeading when it reports none).
+  gdrhcr::Heading command_heading(int r) const;
   // Every robot's cell as the executor has accepted it (kNoCell: not placed); a report it rejected
   // (inconsistent) is not in it. Fleet::set_accepted_cells takes it.
   std::vector<Cell> accepted_cells() const;
@@ -115,12 +137,14 @@ class Executor {
   const ExecutorConfig& config() const { return cfg_; }
   void set_plan_deadline(double s) { cfg_.plan_deadline_s = s; }
   int num_robots() const { return static_cast<int>(tracks_.size()); }
-  // Introspection (tests, markers): robot r's committed cells not reached yet, in order; the first
-  // is being made when dispatched(r).
+  // Introspection (tests, markers): robot r's committed cells not reached yet, in order (a turn
+  // repeats its cell); the first is being made when dispatched(r). committed_poses: with headings.
   std::vector<Cell> committed(int r) const;
+  std::vector<gdrhcr::Pose> committed_poses(int r) const;
   bool dispatched(int r) const { return tracks_[r].dispatched; }
   int agent_of(int r) const { return agent_of_robot_[r]; }  // robot r's planner agent index, -1 before it is placed
   Cell cell(int r) const { return tracks_[r].cell; }
+  gdrhcr::Heading heading(int r) const { return tracks_[r].heading; }
   RobotHealth health(int r) const { return tracks_[r].health; }
   uint64_t steps() const { return steps_; }            // planned steps so far
   uint64_t resyncs_total() const { return resyncs_total_; }
@@ -137,8 +161,9 @@ class Executor {
     bool active = false;        // has a known cell and is planned (as a robot or an obstacle)
     RobotHealth health = RobotHealth::kMissing;
     Cell cell = gdrhcr::kNoCell;
-    std::deque<Cell> path;      // committed cells after `cell`
-    bool dispatched = false;    // path.front() was commanded: reserved until arrival
+    gdrhcr::Heading heading = gdrhcr::kNoHeading;  // rotation: planned; mapf: as reported
+    std::deque<gdrhcr::Pose> path;  // committed poses after (cell, heading); mapf: each move's heading
+    bool dispatched = false;    // path.front() was commanded: reserved until arrival (a turn: until done)
     uint64_t dispatched_at = 0; // the tick (counted by tick()) of that command
     Cell claimed = gdrhcr::kNoCell;  // inconsistent: the cell it reported (blocked)
     bool unknown_move = false;  // reported moving with no move commanded: its neighbours are blocked
@@ -150,6 +175,9 @@ class Executor {
   bool place(int r, const RobotRecord& rec, TickOutput& out);
   bool fall_silent(int r, TickOutput& out);
   bool take_report(int r, const std::vector<RobotRecord>& robots, TickOutput& out);
+  bool take_heading(int r, const RobotRecord& rec, TickOutput& out);
+  RobotHealth report_health(int r, const RobotRecord& rec, TickOutput& out) const;
+  bool rotation() const { return cfg_.action_model == gdrhcr::ActionModel::kRotation; }
   bool take_unexpected_cell(int r, Cell x, const std::vector<RobotRecord>& robots, TickOutput& out);
   bool take_entering(int r, Cell x, const std::vector<RobotRecord>& robots, TickOutput& out);
   bool withdraw_move(int q, Cell x, int r, const std::vector<RobotRecord>& robots);
@@ -171,6 +199,7 @@ class Executor {
   // One planning step's input, per planner agent, and the cells to keep the agents out of.
   struct StepInput {
     std::vector<Cell> positions;     // committed end states (a bad robot: its cell)
+    std::vector<gdrhcr::Heading> headings, next_headings;  // rotation: at the end states, planned
     std::vector<uint8_t> immovable;  // bad robots, robots with full commitments or on hold
     std::vector<Cell> obstacles;     // bad robots' cells (the distance table routes around them)
     std::vector<Cell> blocked;       // where bad robots may be besides (then the late cells too)
@@ -181,7 +210,7 @@ class Executor {
   void gather_agents(const std::vector<std::vector<Cell>>& goals, const std::vector<uint8_t>& hold, StepInput& in,
                      TickOutput& out) const;
   std::vector<Cell> call_planner(StepInput& in, DeadlinePlanner& planner, TickOutput& out);
-  void commit_step(const StepInput& in, std::vector<Cell>& next, TickOutput& out);
+  void commit_step(StepInput& in, std::vector<Cell>& next, TickOutput& out);
 
   const gdrhcr::Grid& grid_;
   const gdrhcr::DistTable& dist_;
@@ -199,5 +228,9 @@ class Executor {
 // be executed by robots that do not move in lock-step: their moves become waits (held set). Returns
 // the number of robots put on hold.
 int hold_rotations(const std::vector<Cell>& pos, std::vector<Cell>& next, std::vector<uint8_t>& held);
+
+// What a robot known at `known` does to reach the commanded cell and heading: forward into
+// another cell, a turn in place (a half turn starts clockwise), or a wait.
+gdrhcr::Action command_action(gdrhcr::Pose known, Cell cell, gdrhcr::Heading heading);
 
 }  // namespace gd_rhcr_planner

@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "gdrhcr/action_model.hpp"
 #include "gdrhcr/dist_table.hpp"
 #include "gdrhcr/grid.hpp"
 
@@ -56,6 +57,7 @@ struct RobotRecord {
   bool silent = false;            // no report for longer than the offline timeout
   bool moving = false;
   Cell entering = gdrhcr::kNoCell;  // while moving: the cell it reports entering (kNoCell: not known)
+  gdrhcr::Heading heading = gdrhcr::kNoHeading;  // the heading it reports (kNoHeading: none)
   double last_report = 0;         // time of the last accepted report (caller's clock, s)
   int64_t task = -1;
 };
@@ -74,9 +76,10 @@ class Fleet {
   // Returns false with `error` set for an unknown id or a cell that is off the map or blocked;
   // the report is then ignored. A report brings a silent robot back.
   // `entering` (optional, while moving): the cell the robot reports entering; it must be a free
-  // neighbour of (x, y).
+  // neighbour of (x, y). `heading`: the one it reports (action_model.hpp), kNoHeading for none.
   bool update_robot(int64_t id, int x, int y, bool offline, bool moving, std::string& error,
-                    double now = 0, std::optional<std::pair<int, int>> entering = std::nullopt);
+                    double now = 0, std::optional<std::pair<int, int>> entering = std::nullopt,
+                    gdrhcr::Heading heading = gdrhcr::kNoHeading);
   // Robots that have reported before but not within `timeout` seconds of `now` become silent:
   // offline (an obstacle at their last cell) until they report again; advance() then requeues
   // their tasks. Returns the robots that became silent in this call.

@@ -50,8 +50,10 @@ struct FleetConfig {
   std::string dispatcher = "batch";
   DispatchParams dispatch;
   std::string task_store;         // journal path; "" = off
+  std::string action_model = "mapf";  // the robots' moves: mapf (any neighbour) or rotation (turns; issue 23)
   // Fills defaults (plan_deadline 0) and throws gdrhcr::ParamError naming a bad value.
   void validate();
+  gdrhcr::ActionModel model() const;  // action_model parsed (after validate)
 };
 
 // The parameters dynamic_reconfigure changes (cfg/Planner.cfg); planner parameters the planner
@@ -82,6 +84,7 @@ struct RobotReport {
   bool moving = false;
   bool entering_known = false;  // moving into (entering_x, entering_y)
   int entering_x = 0, entering_y = 0;
+  gdrhcr::Heading heading = gdrhcr::kNoHeading;  // the planner's numbering (action_model.hpp); kNoHeading: none
   double stamp = 0;          // the message's stamp (s); 0 = unstamped, not checked for order
   bool pose_finite = true;   // every pose field is a finite number
 };
@@ -96,6 +99,8 @@ struct RobotCommand {
   Cell cell = gdrhcr::kNoCell;
   uint8_t mode = 0;   // RobotState.MODE_* after the move
   int64_t task = -1;
+  gdrhcr::Heading heading = gdrhcr::kNoHeading;      // to face in `cell`; kNoHeading: any
+  gdrhcr::Action action = gdrhcr::Action::kWait;    // from the pose the manager knows (command_action)
 };
 
 // One tick's figures (gd_rhcr_msgs/PlannerStats without the header).
@@ -183,7 +188,7 @@ class FleetManager {
   void read_snapshot();
   void apply_reconfigure_locked(std::unique_ptr<DeadlinePlanner>& retired);
   void count_outcome_locked(const TickOutput& exec);
-  std::vector<RobotCommand> commands_locked(const std::vector<Cell>& command) const;
+  std::vector<RobotCommand> commands_locked(const std::vector<Cell>& command, const std::vector<gdrhcr::Heading>& heading) const;
   void groups_of(const TickOutput& exec, const gdrhcr::Planner* primary, TickResult& out,
                  std::vector<int>& group_of) const;
   void stats_locked(const TickOutput& exec, const gdrhcr::Planner* primary, double step_time, double wall,

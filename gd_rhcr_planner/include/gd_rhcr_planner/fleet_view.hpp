@@ -6,12 +6,14 @@
 #include <string>
 #include <vector>
 
+#include "gdrhcr/action_model.hpp"
 #include "gdrhcr/grid.hpp"
 
 namespace gd_rhcr_planner {
 
 struct FleetView {
   std::vector<gdrhcr::Cell> pos, next;
+  std::vector<gdrhcr::Heading> heading;          // per robot (kNoHeading: none reported)
   std::vector<gdrhcr::Cell> goal;                // first goal (kNoCell or own cell: none)
   std::vector<int> group_of;                     // group index per robot
   std::vector<uint8_t> offline, held;            // held: paused or emergency stop

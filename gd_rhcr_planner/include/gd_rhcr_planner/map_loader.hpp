@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "gdrhcr/action_model.hpp"
 #include "gdrhcr/grid.hpp"
 
 namespace gd_rhcr_planner {
@@ -27,6 +28,14 @@ struct MapFrame {
   int cell_x(double wx) const;
   int cell_y(double wy) const;
 };
+
+// The yaw in the map frame of a robot facing heading h (action_model.hpp): REP 103, counter-
+// clockwise from +x. East (+x in cells and metres) is 0, north (-row in cells, +y in metres) pi/2,
+// south -pi/2, west pi (map origins are not rotated, see load_map).
+inline double heading_yaw(gdrhcr::Heading h) {
+  constexpr double kYaw[gdrhcr::kNumHeadings] = {0.0, -1.5707963267948966, 3.141592653589793, 1.5707963267948966};
+  return kYaw[h & 3];
+}
 
 struct LoadedMap {
   gdrhcr::Grid grid;

@@ -9,6 +9,7 @@ namespace gd_rhcr_planner {
 
 using gdrhcr::Cell;
 using gdrhcr::kNoCell;
+using gdrhcr::kNoHeading;
 
 DelayedFleet::DelayedFleet(const gdrhcr::Grid& g, int n, uint64_t seed, int min_speed, int max_speed)
     : g_(g), rng_(seed), delay_rng_(seed * 0x9E3779B97F4A7C15ULL + 1), robots_(n) {
@@ -44,8 +45,14 @@ std::vector<RobotRecord> DelayedFleet::records() const {
     out[i].reported_offline = s.offline;
     out[i].offline = s.offline || s.silent;
     out[i].silent = s.silent;
+    out[i].heading = s.heading;
   }
   return out;
+}
+
+void DelayedFleet::give_headings(bool forward_only) {
+  forward_only_ = forward_only;
+  for (SimRobot& s : robots_) s.heading = static_cast<gdrhcr::Heading>(std::uniform_int_distribution<int>(0, 3)(rng_));
 }
 
 std::vector<std::vector<Cell>> DelayedFleet::goals(int& reached) {
@@ -69,9 +76,10 @@ std::vector<std::vector<Cell>> DelayedFleet::goals(int& reached) {
 // Takes robot i's command c: a moving robot must be told the cell it is entering; a robot at rest
 // remembers it and starts the move as soon as it is not delayed (see start_moves). A robot that
 // reports a fake cell takes that cell for its own: told to stay there, it stays.
-std::string DelayedFleet::take_command(size_t i, Cell c) {
+std::string DelayedFleet::take_command(size_t i, Cell c, gdrhcr::Heading h) {
   SimRobot& s = robots_[i];
   if (c == kNoCell || s.missing || s.silent) return "";
+  s.cmd_heading = h;
   if (s.fake != kNoCell && c == s.fake) c = s.cell;
   if (s.moving) {
     if (c != s.dst)
@@ -80,16 +88,35 @@ std::string DelayedFleet::take_command(size_t i, Cell c) {
   }
   if (c != s.cell && !g_.step_allowed(s.cell, c))
     return "robot " + std::to_string(i) + ": " + g_.describe(s.cell) + " -> " + g_.describe(c);
+  if (forward_only_ && c != s.cell && !s.turning && gdrhcr::heading_of_move(g_, s.cell, c) != s.heading)
+    return "robot " + std::to_string(i) + " facing " + gdrhcr::heading_name(s.heading) + " in " + g_.describe(s.cell) +
+           " was sent into " + g_.describe(c) + ", which it does not face";
   s.cmd = c;
   return "";
 }
 
+// A turning robot at rest that does not face its command's heading (a commanded neighbour's, else
+// the commanded one) starts a quarter turn towards it. True while it must turn before it moves.
+bool DelayedFleet::start_turn(SimRobot& s) {
+  if (s.heading == kNoHeading || s.cmd == kNoCell) return false;
+  const gdrhcr::Heading want = s.cmd != s.cell ? gdrhcr::heading_of_move(g_, s.cell, s.cmd) : s.cmd_heading;
+  if (want == kNoHeading || want == s.heading) return false;
+  if (!s.turning) {
+    s.turning = gdrhcr::rotate_ccw(s.heading) == want ? -1 : 1;
+    s.left = s.speed;
+    ++s.turns;
+    s.turns_before_moves += s.cmd != s.cell;
+  }
+  return true;
+}
+
 // Robots at rest, not delayed, with a command to a neighbour start it (a robot that will not move,
-// offline or reporting a fake cell, does not).
+// offline or reporting a fake cell, does not); a turning robot turns to face it first.
 void DelayedFleet::start_moves() {
   for (SimRobot& s : robots_) {
     if (s.offline && !s.moving) s.cmd = kNoCell;  // OFFLINE at rest cancels its move
     if (s.missing || s.silent || s.offline || s.fake != kNoCell || s.moving || s.delay > 0) continue;
+    if (s.turning || start_turn(s)) continue;
     if (s.cmd == kNoCell || s.cmd == s.cell) continue;
     s.moving = true;
     s.dst = s.cmd;
@@ -108,7 +135,7 @@ std::string DelayedFleet::execute(const TickOutput& out, double p_delay, int max
     if (s.missing || s.silent) continue;
     if (s.delay == 0 && p_delay > 0 && u(delay_rng_) < p_step)
       s.delay = m == 1 ? d(delay_rng_) * SimRobot::kSub : std::max(1, (d(delay_rng_) * SimRobot::kSub + m / 2) / m);
-    std::string err = take_command(i, out.command[i]);
+    std::string err = take_command(i, out.command[i], out.command_heading.empty() ? kNoHeading : out.command_heading[i]);
     if (!err.empty()) return err;
   }
   for (int k = 0; k < SimRobot::kSub; ++k) {
@@ -123,12 +150,16 @@ std::string DelayedFleet::execute(const TickOutput& out, double p_delay, int max
         s.cell = s.dst;
         s.moving = false;
       }
+      if (s.turning && --s.left <= 0) {
+        s.heading = static_cast<gdrhcr::Heading>((s.heading + s.turning) & 3);
+        s.turning = 0;
+      }
     }
     std::string err = check_physical();
     if (!err.empty()) return err;
     if (between && k + 1 < SimRobot::kSub)
-      for (const auto& [i, c] : between(records())) {
-        err = take_command(static_cast<size_t>(i), c);
+      for (const Command& c : between(records())) {
+        err = take_command(static_cast<size_t>(c.robot), c.cell, c.heading);
         if (!err.empty()) return err;
       }
   }
@@ -137,8 +168,8 @@ std::string DelayedFleet::execute(const TickOutput& out, double p_delay, int max
 
 DelayedFleet::Between DelayedFleet::on_arrival(Executor& ex) {
   return [&ex](const std::vector<RobotRecord>& reports) {
-    std::vector<std::pair<int, Cell>> cmds;
-    for (int r : ex.advance(reports)) cmds.emplace_back(r, ex.command(r));
+    std::vector<Command> cmds;
+    for (int r : ex.advance(reports)) cmds.push_back({r, ex.command(r), ex.command_heading(r)});
     return cmds;
   };
 }

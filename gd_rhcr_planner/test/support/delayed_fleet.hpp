@@ -4,7 +4,9 @@
 // tick with probability p_delay and lasts a uniform 1..D ticks; a robot at rest does not start its
 // move, a moving robot stops where it is). Used by execution_test.cpp (any delay pattern: no
 // collision, no deadlock) and bench/delay_benchmark.cpp (throughput with and without delays).
-// fleet_sim (the ROS simulator) models the same robots over topics. Test and benchmark support
+// fleet_sim (the ROS simulator) models the same robots over topics. Turning robots (issue 23,
+// give_headings): each robot reports a heading and moves only forward; told a neighbour it does
+// not face (the mapf model) it first turns towards it, a quarter turn taking as long as a move. Test and benchmark support
 // (library gd_rhcr_fleet_testing), not part of the node.
 #pragma once
 
@@ -15,6 +17,7 @@
 #include <vector>
 
 #include "gd_rhcr_planner/execution.hpp"
+#include "gdrhcr/action_model.hpp"
 #include "gdrhcr/grid.hpp"
 
 namespace gd_rhcr_planner {
@@ -30,6 +33,10 @@ struct SimRobot {
   gdrhcr::Cell fake = gdrhcr::kNoCell;  // reports this cell instead of its own (an inconsistent report)
   gdrhcr::Cell goal = gdrhcr::kNoCell;
   gdrhcr::Cell cmd = gdrhcr::kNoCell;  // the last command (a robot at rest starts it when it can)
+  gdrhcr::Heading heading = gdrhcr::kNoHeading;      // turning robots: the heading it faces
+  gdrhcr::Heading cmd_heading = gdrhcr::kNoHeading;  // ... and the last command's
+  int turning = 0;      // +1 / -1 while a quarter turn clockwise / counter-clockwise is under way
+  int turns = 0, turns_before_moves = 0;  // quarter turns made; those a command to a neighbour not faced made
   int goals_reached = 0;
   int moves = 0;
 };
@@ -47,9 +54,19 @@ class DelayedFleet {
   // `reached`) and gets a new random one. A goal under a robot that will not move is replaced
   // (as the fleet requeues tasks under offline robots).
   std::vector<std::vector<gdrhcr::Cell>> goals(int& reached);
-  // Commands sent between ticks, given the robots' reports after a substep: (robot, cell) pairs
-  // (Executor::advance and Executor::command).
-  using Between = std::function<std::vector<std::pair<int, gdrhcr::Cell>>(const std::vector<RobotRecord>&)>;
+  // Turning robots from now on: each gets a random heading (seeded), reports it, and turns (a
+  // quarter turn taking its move time) towards a commanded neighbour before it moves forward.
+  // forward_only: a command into a neighbour the robot does not face is a bad command (the
+  // rotation model's commands turn robots first).
+  void give_headings(bool forward_only);
+  // Commands sent between ticks, given the robots' reports after a substep (Executor::advance,
+  // Executor::command and command_heading).
+  struct Command {
+    int robot;
+    gdrhcr::Cell cell;
+    gdrhcr::Heading heading;
+  };
+  using Between = std::function<std::vector<Command>(const std::vector<RobotRecord>&)>;
   // Applies the commands and runs one tick of motion with delays (p_delay per robot and tick,
   // 1..max_delay_ticks ticks); a robot at rest starts its commanded move whenever it is not
   // delayed. With `between`, the robots' reports go to it after every substep and the commands it
@@ -75,7 +92,8 @@ class DelayedFleet {
 
  private:
   gdrhcr::Cell random_cell(size_t robot);
-  std::string take_command(size_t i, gdrhcr::Cell c);
+  std::string take_command(size_t i, gdrhcr::Cell c, gdrhcr::Heading h);
+  bool start_turn(SimRobot& s);
   void start_moves();
   std::string check_physical();
 
@@ -83,6 +101,7 @@ class DelayedFleet {
   std::mt19937_64 rng_, delay_rng_;     // placement and speeds; delays
   std::vector<std::mt19937_64> goal_rng_;  // per robot: its goals
   std::vector<SimRobot> robots_;
+  bool forward_only_ = false;
 };
 
 }  // namespace gd_rhcr_planner
