@@ -39,6 +39,8 @@ class Recorder(object):
         self.step_times = []
         self.step_ticks = []
         self.step_sizes = []
+        self.step_missing = set()  # robots some step command left out
+        self.num_robots = rospy.get_param("~num_robots")
         self.status = {}  # task id -> list of states
         self.events = {}  # task id -> list of (state, robot, reason, time)
         self.reasons = {}
@@ -87,6 +89,7 @@ class Recorder(object):
             self.step_times.append(time.time())
             self.step_ticks.append(msg.tick)
             self.step_sizes.append(len(msg.commands))
+            self.step_missing |= set(range(self.num_robots)) - set(c.robot_id for c in msg.commands)
 
     def on_status(self, msg):
         with self.lock:
@@ -162,10 +165,14 @@ class WarehouseTest(unittest.TestCase):
         with self.rec.lock:
             times = list(self.rec.step_times[-int(5 * self.tick_rate):])
             ticks = list(self.rec.step_ticks)
+            missing = set(self.rec.step_missing)
             sizes = set(self.rec.step_sizes)
         period = (times[-1] - times[0]) / (len(times) - 1)
         self.assertAlmostEqual(period, 1.0 / self.tick_rate, delta=0.15 / self.tick_rate)
-        self.assertEqual(sizes, {self.num_robots})
+        # Every robot gets a command every tick, but for a robot caught slipping (moving into a
+        # cell it was not commanded: told nothing until it stops); with faults, robot slip_robot.
+        self.assertEqual(missing - {rospy.get_param("~slip_robot", -1)}, set())
+        self.assertEqual(max(sizes), self.num_robots)
         self.assertEqual(ticks, sorted(ticks))
         self.assertGreater(self.rec.robot0_cmds, 0, "per-robot topic robot_0/step_command is silent")
         self.assertTrue(wait_for(lambda: bool(self.rec.planner_diag), 5), "no planner diagnostics")
