@@ -19,7 +19,8 @@
 # Environment: ROBOTS (500), DURATION (s, 3600), SEED (1), KILL_PERIOD (900 s; for runs shorter
 # than two periods DURATION/3, so a short run still restarts twice), WARM (300 s, at most
 # DURATION/4), OUT (results/night_shift.json). Installs and builds what it needs
-# (scripts/ros_env.sh). Its own ROS master port (11713).
+# (scripts/ros_env.sh). Its own ROS master port: PORT (11713); give another one to run beside
+# something else that uses 11713.
 set -eo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 ROBOTS=${ROBOTS:-500}
@@ -38,14 +39,19 @@ for v in ROBOTS DURATION SEED KILL_PERIOD WARM; do
 done
 # shellcheck source=ros_env.sh
 source "$top/scripts/ros_env.sh"
-export ROS_MASTER_URI=http://127.0.0.1:11713
+PORT=${PORT:-11713}
+if ! [[ "$PORT" =~ ^[0-9]+$ ]] || [ "$PORT" -lt 1024 ] || [ "$PORT" -gt 65535 ]; then
+  echo "soak_night_shift: PORT='$PORT' must be a port number (1024-65535)" >&2
+  exit 2
+fi
+export ROS_MASTER_URI=http://127.0.0.1:$PORT
 mkdir -p "$(dirname "$OUT")"
 run="$ROS_HOME/night_shift"
 rm -rf "$run" && mkdir -p "$run"
 soak_json="$run/soak.json"
 echo "soak_night_shift: $ROBOTS robots, ${DURATION} s, seed $SEED, planner killed every ${KILL_PERIOD} s -> $OUT"
 
-roslaunch -p 11713 gd_rhcr_planner soak.launch num_robots:="$ROBOTS" duration:="$DURATION" \
+roslaunch -p "$PORT" gd_rhcr_planner soak.launch num_robots:="$ROBOTS" duration:="$DURATION" \
   robot_steps:=2000000000 seed:="$SEED" faults:=true fault_period:=60 p_delay:=0.01 max_delay_ticks:=20 \
   interlock:=false respawn:=true task_store:="$run/tasks.jsonl" warm:="$WARM" output:="$soak_json" \
   >"$run/launch.log" 2>&1 &
