@@ -119,11 +119,17 @@ bool Fleet::update_robot(int64_t id, int x, int y, bool offline, bool moving, st
   r.cell = c;
   r.reported_offline = offline;
   r.silent = false;
-  r.offline = offline;
+  r.offline = offline || r.stuck;
   r.moving = moving;
   r.heading = heading;
   r.last_report = now;
   return true;
+}
+
+void Fleet::set_stuck(int r, bool stuck) {
+  RobotRecord& rec = robots_[r];
+  rec.stuck = stuck;
+  rec.offline = rec.reported_offline || rec.silent || stuck;
 }
 
 std::vector<int> Fleet::mark_silent(double now, double timeout) {
@@ -213,7 +219,9 @@ void Fleet::advance() {
     TaskRecord& t = it->second;
     if (rob.offline) {
       rob.task = -1;
-      const std::string why = rob.silent ? " stopped reporting" : " went offline";
+      const std::string why = rob.silent ? " stopped reporting"
+                              : rob.stuck ? "'s reports have not fitted for too long"
+                                          : " went offline";
       set_state(t, kQueued, -1,
                 "robot " + std::to_string(r) + why +
                     (t.state == kPicked ? " carrying the load; requeued from the pickup" : "; requeued"));

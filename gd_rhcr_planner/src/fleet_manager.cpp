@@ -494,6 +494,7 @@ TickResult FleetManager::tick(double now, double wall, bool view) {
     return out;
   }
   out.stepped = true;
+  release_stuck_locked(exec, now);
   write_snapshot_locked(exec);
   for (const std::string& w : exec.warnings) log(LogLevel::kWarn, w);
   // The primary planner's groups and paths, when it planned this tick (else it may still be
@@ -506,6 +507,31 @@ TickResult FleetManager::tick(double now, double wall, bool view) {
   stats_locked(exec, primary, steady_seconds() - t0, wall, out);
   if (view) view_locked(exec, primary, group_of, in.goals, out);
   return out;
+}
+
+// A robot the executor has found inconsistent for longer than ~offline_timeout (its reports name a
+// cell another robot holds, or one it cannot have reached) gives its task back, like a robot gone
+// offline, and gets none until its reports fit again.
+void FleetManager::release_stuck_locked(const TickOutput& exec, double now) {
+  inconsistent_since_.resize(exec.health.size(), -1.0);
+  for (size_t i = 0; i < exec.health.size(); ++i) {
+    const int r = static_cast<int>(i);
+    double& since = inconsistent_since_[i];
+    if (exec.health[i] != RobotHealth::kInconsistent) {
+      since = -1.0;
+      if (fleet_->robot(r).stuck) {
+        fleet_->set_stuck(r, false);
+        log(LogLevel::kInfo, "robot " + std::to_string(r) + "'s reports fit again: it takes tasks again");
+      }
+      continue;
+    }
+    if (since < 0) since = now;
+    if (now - since > cfg_.offline_timeout && !fleet_->robot(r).stuck) {
+      fleet_->set_stuck(r, true);
+      log(LogLevel::kWarn, "robot " + std::to_string(r) + "'s reports have not fitted for " +
+                               number(cfg_.offline_timeout) + " s: its task is requeued, it gets none until they fit");
+    }
+  }
 }
 
 std::vector<RobotCommand> FleetManager::between_ticks() {

@@ -338,6 +338,49 @@ TEST(FleetManager, NoPickupFromAReportTheExecutorRejected) {
   EXPECT_EQ(state(), kPicked);
 }
 
+// Night shift: a robot whose reports do not fit (here: the cell another robot stands in) for
+// longer than ~offline_timeout gives its task back, which goes to another robot; once its reports
+// fit again it takes tasks again. (Before, it kept its task for as long as it stayed so.)
+TEST(FleetManager, ARobotWhoseReportsDoNotFitForTooLongGivesItsTaskBack) {
+  const Grid g = warehouse();
+  FleetConfig c = config("pibt", 2);
+  c.offline_timeout = 1.0;
+  FleetManager fm(g, c);
+  SimFleet sim{fm, {{0, 0}, {11, 4}}};
+  sim.step();
+  const SubmitResult task = fm.submit({3, 0, 6, 0, 0, 0});
+  ASSERT_TRUE(task.accepted);
+  sim.step();
+  auto owner = [&] {
+    for (auto& [id, t] : fm.tasks(true))
+      if (id == task.task_id) return t.robot;
+    return -2;
+  };
+  ASSERT_EQ(owner(), 0);
+  std::string err;
+  for (int k = 0; k < 30 && owner() == 0; ++k) {  // 0.1 s apart: robot 0 reports robot 1's cell
+    sim.now += 0.1;
+    ASSERT_TRUE(fm.update_robot(0, 11, 4, false, false, sim.now, err)) << err;
+    ASSERT_TRUE(fm.update_robot(1, sim.xy[1].first, sim.xy[1].second, false, false, sim.now, err)) << err;
+    fm.tick(sim.now, sim.now, false);
+    if (k < 9) EXPECT_EQ(owner(), 0) << "taken before ~offline_timeout, at report " << k;
+  }
+  for (int t = 0; t < 3 && owner() != 1; ++t) {
+    sim.now += 0.1;
+    ASSERT_TRUE(fm.update_robot(0, 11, 4, false, false, sim.now, err)) << err;
+    ASSERT_TRUE(fm.update_robot(1, sim.xy[1].first, sim.xy[1].second, false, false, sim.now, err)) << err;
+    fm.tick(sim.now, sim.now, false);
+  }
+  EXPECT_EQ(owner(), 1) << "the task of a robot whose reports do not fit is not handed on";
+  sim.now += 0.1;
+  TickResult r = fm.tick(sim.now, sim.now, true);
+  ASSERT_EQ(r.view.offline.size(), 2u);
+  EXPECT_TRUE(r.view.offline[0]) << "shown as out of service";
+  sim.step();  // robot 0 reports where it is again
+  r = sim.step(true);
+  EXPECT_FALSE(r.view.offline[0]) << "a robot whose reports fit again stays out";
+}
+
 // Night shift: the planner is killed while a robot is silent. Its successor must not send the
 // others through the cell the silent robot stands in, though that robot never reports again.
 TEST(FleetManager, ARestartedPlannerKeepsARobotThatDoesNotReportWhereItWasLastKnown) {

@@ -52,8 +52,9 @@ struct SubmitResult {
 struct RobotRecord {
   bool reported = false;
   Cell cell = gdrhcr::kNoCell;
-  bool offline = false;           // reported_offline || silent: an obstacle, gets no task
+  bool offline = false;           // reported_offline || silent || stuck: an obstacle, gets no task
   bool reported_offline = false;  // the robot's own report (mode OFFLINE)
+  bool stuck = false;             // its reports have not fitted for too long (Fleet::set_stuck)
   bool silent = false;            // no report for longer than the offline timeout
   bool moving = false;
   Cell entering = gdrhcr::kNoCell;  // while moving: the cell it reports entering (kNoCell: not known)
@@ -84,6 +85,10 @@ class Fleet {
   // offline (an obstacle at their last cell) until they report again; advance() then requeues
   // their tasks. Returns the robots that became silent in this call.
   std::vector<int> mark_silent(double now, double timeout);
+  // A robot whose reports the execution layer has not believed for too long (it claims a cell
+  // another robot holds, or one it cannot have reached) is taken out like an offline one: its task
+  // is requeued by advance() and it gets none until it is cleared (stuck = false).
+  void set_stuck(int r, bool stuck);
   int offline_count() const;
   bool all_reported() const;
   int missing_robots() const;

@@ -187,6 +187,7 @@ class FleetManager {
   void write_snapshot_locked(const TickOutput& exec) const;
   void read_snapshot();
   void apply_reconfigure_locked(std::unique_ptr<DeadlinePlanner>& retired);
+  void release_stuck_locked(const TickOutput& exec, double now);
   void count_outcome_locked(const TickOutput& exec);
   std::vector<RobotCommand> commands_locked(const std::vector<Cell>& command, const std::vector<gdrhcr::Heading>& heading) const;
   void groups_of(const TickOutput& exec, const gdrhcr::Planner* primary, TickResult& out,
@@ -234,6 +235,7 @@ class FleetManager {
   uint64_t last_problem_tick_ = 0;
   std::map<std::string, double> last_logged_;
   std::vector<double> last_stamp_;  // per robot: the stamp of its last accepted report
+  std::vector<double> inconsistent_since_;  // per robot: when its reports stopped fitting (-1: they fit)
   std::string last_ignored_;        // why the last ignored report was ignored
   std::string snapshot_path_;       // the robots' cells for a successor (with the task store only)
   std::map<int, std::pair<Cell, bool>> unreported_;  // from the snapshot: robot -> (cell, moving)
