@@ -15,9 +15,9 @@ namespace gdrhcr_lorr {
 //   GDRHCR_PLANNER    a name of gdrhcr::make_planner (default gd-rhcr)
 //   GDRHCR_PARAMS     its parameters as on gdrhcr_sim's command line, e.g. "--H 10 --V 3"
 //   GDRHCR_BUDGET_MS  our time per step in ms (0 = none), distance rows included: the rows of
-//                     new goals get half of it (a step that spends over a tenth of it on them is
-//                     all waits), GD-RHCR's step-budget 90% of it and RHCR's PBS timeout all of
-//                     it, unless GDRHCR_PARAMS sets them
+//                     new goals get up to half of it (an agent whose goal has no row yet keeps
+//                     its last goal), GD-RHCR's step-budget is 90% of it, less the rows' time, and
+//                     RHCR's PBS timeout all of it, unless GDRHCR_PARAMS sets them
 //   GDRHCR_TIMES_OUT  a file that gets our time per step in ms, one line per step (optional)
 //   GDRHCR_SEED       seed for the planner's tie-breaks (default 0)
 //   GDRHCR_DIST_MB    memory for distance rows (default 2048: a fleet of 10,000 on LoRR's
@@ -46,8 +46,9 @@ class Bridge {
   // One timestep within the Start-Kit's time_limit_s: locations and headings (0 east, 1 south,
   // 2 west, 3 north) of every agent and its revealed goal locations, current one first (empty:
   // no task). actions[i] gets the Start-Kit's Action value (0 FW, 1 CR, 2 CCR, 3 W). The
-  // distance rows of new goals are computed first, within half the limit; a step that needs
-  // longer (the first of a fleet of thousands) is all waits, and the next ones go on with them.
+  // distance rows of new goals are computed first, within half the budget (30% of the limit
+  // without one); an agent whose goal has no row yet keeps its last goal, and a step where some
+  // agent has none at all (the first of a fleet of thousands) is all waits.
   void plan(int timestep, double time_limit_s, const std::vector<int>& locations, const std::vector<int>& headings,
             const std::vector<std::vector<int>>& goals, std::vector<int>& actions);
 

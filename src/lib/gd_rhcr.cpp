@@ -143,7 +143,9 @@ StepReport GdRhcrPlanner::plan_step(const WorldView& world, std::vector<Cell>& n
 // reads: the density around groups, agents by map block, the step budget, the taken cells.
 void GdRhcrPlanner::begin_step(const WorldView& world) {
   now_ = world.timestep;
-  budget_ = StepBudget(StepBudget::Clock::now(), cfg_.step_budget_s);
+  double budget_s = cfg_.step_budget_s;
+  if (world.step_budget_s > 0) budget_s = budget_s > 0 ? std::min(budget_s, world.step_budget_s) : world.step_budget_s;
+  budget_ = StepBudget(StepBudget::Clock::now(), budget_s);
   if (world.rotation()) partition_.compute(world.positions, *world.headings, cfg_.V);
   else partition_.compute(world.positions, cfg_.V);
   if (cfg_.max_density < 1.0) density_.count(world.positions);

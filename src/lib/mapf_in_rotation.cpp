@@ -51,6 +51,7 @@ StepReport MapfInRotation::plan_step(const WorldView& world, std::vector<Cell>& 
   const int n = world.num_agents();
   cells_.assign(n, kNoCell);
   WorldView view{world.grid, dist_, world.timestep, world.positions, world.goals, world.immovable, world.blocked};
+  view.step_budget_s = world.step_budget_s;
   const StepReport report = inner_->plan_step(view, cells_);
   const std::vector<Action> act = rotation_actions_for_step(world.grid, world.positions, *world.headings, cells_);
   for (int i = 0; i < n; ++i) {

@@ -176,7 +176,7 @@ std::vector<ParamSpec> gd_rhcr_table() {
       real("c-soft", 0, 1e9, "1", "cost of a conflict with another group's plan"),
       integer("k-threshold", 1, kBig, "", "groups this large go to the secondary solver", "k-threshold"),
       real("timeout", 0, 1e9, "60", "seconds per primary solve (> 0)"),
-      real("step-budget", 0, 1e6, "0", "seconds per step (0 = none): solves get 60%, guidance stops at 90%"),
+      real("step-budget", 0, 1e6, "0", "seconds per step (0 = none): solves get 60%, guidance stops at 85%"),
       integer("node-budget", 0, 2000000000, "0", "PBS node limit per solve, deterministic (0 = none)"),
       integer("threads", 1, 1024, "1", "thread pool for the groups replanned in one step"),
       choice("solver", {"pbs", "pibt"}, "pbs", "the primary solver"),

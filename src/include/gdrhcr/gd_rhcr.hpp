@@ -42,7 +42,7 @@ struct GdRhcrConfig {
   double timeout_s = 60.0;    // wall-clock limit of one primary solve
   // Wall-clock budget of a whole step; 0 = none. Primary solves get its first 60% (groups not
   // solved by then are moved by the secondary solver, counted as budget_skips), guidance
-  // searches stop at 90%.
+  // searches stop at 85%.
   double step_budget_s = 0;
   long node_budget = 0;       // deterministic PBS node limit per solve; 0 = none
   int threads = 1;            // thread-pool size for groups replanned in one step

@@ -41,6 +41,10 @@ struct WorldView {
   ActionModel action_model = ActionModel::kMapf;
   const std::vector<Heading>* headings = nullptr;
   std::vector<Heading>* next_headings = nullptr;
+  // This step's wall-clock budget in seconds, from the call on (0 = the planner's own, if any):
+  // a caller that spent part of its time already (the LoRR adapter's distance rows) hands on the
+  // rest. Planners with a step budget (GD-RHCR) keep the smaller of the two.
+  double step_budget_s = 0;
   bool rotation() const { return action_model == ActionModel::kRotation; }
   Pose pose(int i) const { return {positions[i], headings ? (*headings)[i] : kEast}; }
   int num_agents() const { return static_cast<int>(positions.size()); }
