@@ -491,6 +491,7 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
     for (int i : agents)
       preferred[i] = world.rotation() ? guidance_->next_move(i, world.timestep, world.positions[i])
                                       : guidance_->next_cell(i, world.timestep, world.positions[i]);
+    pibt_.set_deadline(budget_.secondary);
     pibt_.step(world, moves, agents, fixed, &preferred);
     for (int i : agents) {  // how often the guidance foretold the move (it had a cell for it)
       if (preferred[i] == kNoCell) continue;
@@ -498,6 +499,7 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
       if (moves[i] != preferred[i]) ++guidance_missed_;
     }
   } else {
+    pibt_.set_deadline(budget_.secondary);
     pibt_.step(world, moves, agents, fixed);
   }
   for (int i : agents) out[i] = moves[i];
@@ -624,6 +626,7 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"threshold_fallbacks", threshold_fallbacks_},
           {"density_fallbacks", density_fallbacks_},
           {"budget_skips", budget_skips_},
+          {"secondary_deadline_stops", pibt_.deadline_stops()},
           {"guidance_cut_short", guidance_ ? guidance_->cut_short() : 0},
           {"guidance_searches", guidance_ ? guidance_->searches() : 0},
           {"guidance_kept", guidance_ ? guidance_->kept() : 0},

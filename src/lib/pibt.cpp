@@ -81,6 +81,7 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   }
   preferred_ = nullptr;
   immovable_ = nullptr;
+  deadline_ = std::chrono::steady_clock::time_point::max();
 }
 
 // The mapf step (and the rotation model's kCells): immovable agents, fixed moves and blocked

@@ -2,6 +2,7 @@
 // et al., "EPIBT", LoRR 2024, arXiv 2511.09193) and PIBT (Okumura et al., AIJ 2022).
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <climits>
 
 #include "gdrhcr/pibt.hpp"
@@ -187,8 +188,13 @@ void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
     if (world.is_immovable(i)) locked_[i] = lock_stamp_;
   }
   std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) { return priority_[a] > priority_[b]; });
+  const bool timed = deadline_ != std::chrono::steady_clock::time_point::max();
   for (int i : order_) {
     if (locked_[i] == lock_stamp_) continue;
+    if (timed && std::chrono::steady_clock::now() >= deadline_) {  // the rest hold their cells (WWW)
+      ++deadline_stops_;
+      break;
+    }
     op_plans_ = 0;
     if (!plan_operation(world, i, 0)) rollback(0, 0);
     locked_[i] = lock_stamp_;

@@ -161,3 +161,48 @@ TEST(RotationPlanners, NobodyEntersABlockedCellAndRhcrTurnsAround) {
     if (std::string(name) == "rhcr") EXPECT_TRUE(reached[0]) << name << ": never got past the blocked cell";
   }
 }
+
+TEST(RotationPlanners, BothWaysOfRotationPibtStayValidWhenCrowded) {
+  // PIBT over cells (the default) and over 3-action operations, alone and as GD-RHCR's secondary.
+  for (const char* planner : {"pibt", "gd-rhcr"})
+    for (const char* way : {"cells", "operations"}) {
+      Params p;
+      p.set("rotation-pibt", way);
+      if (std::string(planner) != "pibt") p.set("node-budget", "3000");
+      run_valid(planner, "random-32-32-20.map", ActionModel::kRotation, 250, 40, p);
+    }
+}
+
+TEST(RotationPlanners, OperationsStopAtTheStepBudgetAndTheOthersWait) {
+  // A budget nothing fits in: GD-RHCR's PIBT over operations stops before its first agent at
+  // every step, every agent waits (valid), and the stops are counted; without a budget it never
+  // stops and the fleet moves.
+  const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+  DistTable dist(g, ActionModel::kRotation);
+  const auto starts = random_starts(g, 300, 3);
+  SimOptions opt;
+  opt.steps = 15;
+  opt.record_paths = true;
+  opt.action_model = ActionModel::kRotation;
+  for (const char* budget : {"1e-9", "0"}) {
+    SCOPED_TRACE(std::string("step-budget ") + budget);
+    Params p;
+    p.set("rotation-pibt", "operations");
+    p.set("step-budget", budget);
+    auto planner = make_planner("gd-rhcr", p, g, 300, 3, ActionModel::kRotation);
+    RandomNavigationStream tasks(g, 3);
+    const SimResult r = run_simulation(g, dist, tasks, *planner, starts, opt);
+    EXPECT_EQ(r.collisions, 0);
+    int moved = 0;
+    for (const auto& path : r.paths)
+      moved += std::any_of(path.begin(), path.end(), [&](Cell c) { return c != path.front(); });
+    const long stops = planner->stats()["secondary_deadline_stops"].get<long>();
+    if (std::string(budget) == "0") {
+      EXPECT_EQ(stops, 0);
+      EXPECT_GE(moved, 150);
+    } else {
+      EXPECT_GE(stops, opt.steps);  // every step's call (repairs may add more)
+      EXPECT_EQ(moved, 0);
+    }
+  }
+}

@@ -31,6 +31,7 @@
 // first. Swap emulation is off in this model (either way, it held agents back; docs/results.md).
 #pragma once
 
+#include <chrono>
 #include <random>
 #include <vector>
 
@@ -86,6 +87,11 @@ class PibtStep {
   double priority(int i) const { return priority_[i]; }
   const PibtOptions& options() const { return opt_; }
   long swaps() const { return swaps_; }
+  // Rotation operations (PibtOptions::Rotation::kOperations) only: the next step() stops planning
+  // agents at `deadline`; those not planned by then keep their cells (wait), which is always
+  // valid. One step only (cleared by step()); the cell PIBT is linear and needs none.
+  void set_deadline(std::chrono::steady_clock::time_point deadline) { deadline_ = deadline; }
+  long deadline_stops() const { return deadline_stops_; }  // steps stopped so
   static constexpr int kOpSteps = 3;  // actions per operation in the rotation model
 
  private:
@@ -116,6 +122,8 @@ class PibtStep {
   std::vector<std::pair<int*, int>> undo_ints_;   // (where, old value), for rollback
   std::vector<std::pair<int, OpPath>> undo_paths_;  // (agent, old operation)
   long op_plans_ = 0;
+  std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
+  long deadline_stops_ = 0;
   void order_candidates(const WorldView& world, int ai, Cell* cand, int m);
   void push_all(const WorldView& world, std::vector<Cell>& next,
                 const std::vector<std::pair<Cell, Cell>>& fixed_moves);
