@@ -182,8 +182,7 @@ int FleetManager::update_robots(const std::vector<RobotReport>& reports, double 
     else if (known && r.stamp > 0 && r.stamp < last_stamp_[r.id])
       why = "robot " + std::to_string(r.id) + ": stamped before its last report (out of order)";
     else if (r.heading != gdrhcr::kNoHeading && (r.heading < 0 || r.heading >= gdrhcr::kNumHeadings))
-      why = "robot " + std::to_string(r.id) + ": unknown heading " + std::to_string(r.heading + 1) +
-            " (RobotState.HEADING_* is 0..4)";
+      why = "robot " + std::to_string(r.id) + ": unknown heading (RobotState.heading is HEADING_NONE 0 .. HEADING_NORTH 4)";
     else if (r.heading == gdrhcr::kNoHeading && cfg_.model() == gdrhcr::ActionModel::kRotation && r.mode != kOffline)
       why = "robot " + std::to_string(r.id) + " reports no heading (HEADING_NONE): ~action_model rotation needs it";
     else if (fleet_->update_robot(r.id, r.x, r.y, r.mode == kOffline, r.moving, why, now,

@@ -33,7 +33,8 @@ void ros_log(LogLevel level, const std::string& msg) {
 }
 
 gdrhcr::Heading heading_of_message(uint8_t h) {
-  return h == gd_rhcr_msgs::RobotState::HEADING_NONE ? gdrhcr::kNoHeading : static_cast<gdrhcr::Heading>(h - 1);
+  if (h == gd_rhcr_msgs::RobotState::HEADING_NONE) return gdrhcr::kNoHeading;
+  return h <= gd_rhcr_msgs::RobotState::HEADING_NORTH ? static_cast<gdrhcr::Heading>(h - 1) : gdrhcr::kNumHeadings;
 }
 
 uint8_t heading_message(gdrhcr::Heading h) {
@@ -59,7 +60,7 @@ std::vector<RobotReport> robot_reports(const gd_rhcr_msgs::RobotStateArray& msg)
     RobotReport r;
     r.id = s.id, r.x = s.x, r.y = s.y, r.mode = s.mode, r.moving = s.moving, r.stamp = stamp;
     r.entering_known = s.entering_known, r.entering_x = s.entering_x, r.entering_y = s.entering_y;
-    r.heading = heading_of_message(s.heading);  // > HEADING_NORTH: out of range, refused by the manager
+    r.heading = heading_of_message(s.heading);  // > HEADING_NORTH: kNumHeadings, refused by the manager
     r.pose_finite = std::isfinite(p.position.x) && std::isfinite(p.position.y) && std::isfinite(p.position.z) &&
                     std::isfinite(p.orientation.x) && std::isfinite(p.orientation.y) &&
                     std::isfinite(p.orientation.z) && std::isfinite(p.orientation.w);

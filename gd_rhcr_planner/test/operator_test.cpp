@@ -168,6 +168,38 @@ TEST(FleetMarkers, LayersOrientationAndOnlyChangesAreResent) {
   EXPECT_EQ(find(a, "operator", 1)->points.size(), 8u);
 }
 
+// Turning robots (issue 23): a robot's triangle points along the heading it reports, also at
+// rest and against its next move's direction: north (row up) is +y in the map frame, south -y.
+TEST(FleetMarkers, RobotsPointAlongTheirReportedHeading) {
+  auto g = small();
+  FleetMarkers fm(g, frame_of(g), {});
+  FleetView v;
+  v.pos = {g.cell(0, 0), g.cell(3, 2), g.cell(5, 0)};
+  v.next = {g.cell(1, 0), g.cell(3, 2), g.cell(5, 0)};
+  v.heading = {gdrhcr::kNorth, gdrhcr::kSouth, gdrhcr::kNoHeading};
+  v.group_of = {0, 1, 2};
+  v.offline = {0, 0, 0};
+  v.held = {0, 0, 0};
+  v.paths.assign(3, {});
+  v.goal.assign(3, gdrhcr::kNoCell);
+  auto a = fm.update(v);
+  const auto* robots = find(a, "robots");
+  ASSERT_NE(robots, nullptr);
+  ASSERT_EQ(robots->points.size(), 9u);
+  auto centre = [&](Cell c) { return std::make_pair(0.5 + g.x_of(c), 0.5 + (g.height() - 1 - g.y_of(c))); };
+  // The tip (first point) of each triangle, from its cell's centre.
+  const auto c0 = centre(v.pos[0]), c1 = centre(v.pos[1]);
+  EXPECT_NEAR(robots->points[0].x, c0.first, 1e-9) << "robot 0 faces north, not its next cell east";
+  EXPECT_GT(robots->points[0].y, c0.second + 0.5);
+  EXPECT_NEAR(robots->points[3].x, c1.first, 1e-9);
+  EXPECT_LT(robots->points[3].y, c1.second - 0.5) << "robot 1 faces south: -y";
+  v.heading[0] = gdrhcr::kWest;  // turned: its triangle turns with it
+  a = fm.update(v);
+  robots = find(a, "robots");
+  ASSERT_NE(robots, nullptr);
+  EXPECT_LT(robots->points[0].x, c0.first - 0.5);
+}
+
 TEST(FleetMarkers, GoalLinesOnlyWhenAskedAndLabelsOnlyForSmallFleets) {
   auto g = small();
   MarkerStyle st;
@@ -213,6 +245,7 @@ TEST(RosMessages, MapCommandsAndLiveParametersConvert) {
   EXPECT_EQ(heading_of_message(gd_rhcr_msgs::RobotState::HEADING_EAST), gdrhcr::kEast);
   EXPECT_EQ(heading_of_message(gd_rhcr_msgs::RobotState::HEADING_SOUTH), gdrhcr::kSouth);
   EXPECT_EQ(heading_of_message(gd_rhcr_msgs::RobotState::HEADING_NONE), gdrhcr::kNoHeading);
+  EXPECT_EQ(heading_of_message(200), gdrhcr::kNumHeadings) << "out of range: refused by the manager";
   PlannerConfig pc = PlannerConfig::__getDefault__();
   LiveConfig l = live_of(pc);
   l.V = 4;

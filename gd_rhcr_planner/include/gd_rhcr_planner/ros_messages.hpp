@@ -28,7 +28,8 @@ std::string xmlrpc_to_string(XmlRpc::XmlRpcValue& v, const std::string& name);
 // The fleet manager's log lines through rosconsole.
 void ros_log(LogLevel level, const std::string& msg);
 // Headings between RobotState.HEADING_* (0 none, 1..4 east, south, west, north) and the planner's
-// (action_model.hpp: kNoHeading, 0..3 in the same order); yaws: heading_yaw (map_loader.hpp).
+// (action_model.hpp: kNoHeading, 0..3 in the same order; a message value above 4 becomes
+// kNumHeadings, which the manager refuses); yaws: heading_yaw (map_loader.hpp).
 gdrhcr::Heading heading_of_message(uint8_t h);
 uint8_t heading_message(gdrhcr::Heading h);
 uint8_t action_message(gdrhcr::Action a);  // StepCommand.ACTION_*
