@@ -123,6 +123,7 @@ class Robot(object):
         self.delay_until = 0.0  # a random delay (~p_delay) holds the robot until then
         self.cmd = None  # the cell of its last command: at rest, it starts the move when it can
         self.cmd_heading = None  # the heading of its last command (None: any)
+        self.update_tick = -1  # the tick of the last step_command_updates entry for it
         self.blocked_on = None  # the (cell, target) move the interlock stopped (counted once)
 
 
@@ -347,6 +348,13 @@ class FleetSim(object):
                 r = self.robots[c.robot_id]
                 if self.dead(r.id, now) or r.id in self.absent:
                     continue  # a dead or absent robot hears nothing
+                # Updates carry the tick they follow: tick k's array arriving after an update of
+                # tick k for this robot is older than that update (two topics, no order between
+                # them), and is not taken.
+                if tick and r.update_tick >= msg.tick:
+                    continue
+                if not tick:
+                    r.update_tick = msg.tick
                 target = (c.next_x, c.next_y)
                 heading = c.next_heading - 1 if 1 <= c.next_heading <= 4 else None
                 if not self.offline(r.id, now):

@@ -39,8 +39,7 @@ class Recorder(object):
         self.step_times = []
         self.step_ticks = []
         self.step_sizes = []
-        self.step_missing = set()  # robots some step command left out
-        self.num_robots = rospy.get_param("~num_robots")
+        self.step_ids = None  # robots named in every step command so far (None: no command yet)
         self.status = {}  # task id -> list of states
         self.events = {}  # task id -> list of (state, robot, reason, time)
         self.reasons = {}
@@ -89,7 +88,8 @@ class Recorder(object):
             self.step_times.append(time.time())
             self.step_ticks.append(msg.tick)
             self.step_sizes.append(len(msg.commands))
-            self.step_missing |= set(range(self.num_robots)) - set(c.robot_id for c in msg.commands)
+            ids = set(c.robot_id for c in msg.commands)
+            self.step_ids = ids if self.step_ids is None else self.step_ids & ids
 
     def on_status(self, msg):
         with self.lock:
@@ -165,7 +165,7 @@ class WarehouseTest(unittest.TestCase):
         with self.rec.lock:
             times = list(self.rec.step_times[-int(5 * self.tick_rate):])
             ticks = list(self.rec.step_ticks)
-            missing = set(self.rec.step_missing)
+            missing = set(range(self.num_robots)) - self.rec.step_ids
             sizes = set(self.rec.step_sizes)
         period = (times[-1] - times[0]) / (len(times) - 1)
         self.assertAlmostEqual(period, 1.0 / self.tick_rate, delta=0.15 / self.tick_rate)
