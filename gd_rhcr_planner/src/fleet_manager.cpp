@@ -424,9 +424,16 @@ void FleetManager::place_unreported_locked(double now) {
   for (const auto& [r, snap] : unreported_) {
     if (fleet_->robot(r).reported) continue;
     std::string err;
-    if (!fleet_->update_robot(r, grid_.x_of(snap.first), grid_.y_of(snap.first), true, snap.second, err, now)) continue;
+    const Cell c = snap.cell;
+    std::optional<std::pair<int, int>> entering;
+    if (snap.moving && snap.entering != gdrhcr::kNoCell)
+      entering = std::make_pair(grid_.x_of(snap.entering), grid_.y_of(snap.entering));
+    if (!fleet_->update_robot(r, grid_.x_of(c), grid_.y_of(c), true, snap.moving, err, now, entering, snap.heading) &&
+        !fleet_->update_robot(r, grid_.x_of(c), grid_.y_of(c), true, snap.moving, err, now))
+      continue;
     log(LogLevel::kWarn, "robot " + std::to_string(r) + " has not reported since the restart: an obstacle at " +
-                             grid_.describe(snap.first) + ", where it was last known, until it reports");
+                             grid_.describe(c) + (entering ? " and " + grid_.describe(snap.entering) : std::string()) +
+                             ", where it was last known, until it reports");
   }
   unreported_.clear();
 }
@@ -438,10 +445,14 @@ void FleetManager::write_snapshot_locked(const TickOutput& exec) const {
   const std::string tmp = snapshot_path_ + ".tmp";
   {
     std::ofstream f(tmp, std::ios::trunc);
-    for (size_t r = 0; r < exec.cells.size(); ++r)
-      if (exec.cells[r] != gdrhcr::kNoCell)
-        f << r << ' ' << exec.cells[r] << ' ' << (exec.command[r] != gdrhcr::kNoCell && exec.command[r] != exec.cells[r])
-          << '\n';
+    // robot, cell, moving, heading (-1: none), the cell it was commanded into (-1: none)
+    for (size_t r = 0; r < exec.cells.size(); ++r) {
+      if (exec.cells[r] == gdrhcr::kNoCell) continue;
+      const bool moving = exec.command[r] != gdrhcr::kNoCell && exec.command[r] != exec.cells[r];
+      const int heading = r < exec.headings.size() ? exec.headings[r] : gdrhcr::kNoHeading;
+      f << r << ' ' << exec.cells[r] << ' ' << moving << ' ' << heading << ' '
+        << (moving ? static_cast<long long>(exec.command[r]) : -1LL) << '\n';
+    }
     if (!f) return;
   }
   std::rename(tmp.c_str(), snapshot_path_.c_str());
@@ -449,11 +460,20 @@ void FleetManager::write_snapshot_locked(const TickOutput& exec) const {
 
 void FleetManager::read_snapshot() {
   std::ifstream f(snapshot_path_);
-  long long r = 0, cell = 0;
-  int moving = 0;
-  while (f >> r >> cell >> moving)
-    if (r >= 0 && r < cfg_.num_robots && grid_.is_free(static_cast<Cell>(cell)))
-      unreported_[static_cast<int>(r)] = {static_cast<Cell>(cell), moving != 0};
+  const auto free_cell = [&](long long c) { return c >= 0 && c < grid_.num_cells() && grid_.is_free(static_cast<Cell>(c)); };
+  for (std::string line; std::getline(f, line);) {  // heading and commanded cell: optional (older files)
+    std::istringstream in(line);
+    long long r = 0, cell = 0, entering = -1;
+    int moving = 0, heading = gdrhcr::kNoHeading;
+    if (!(in >> r >> cell >> moving) || r < 0 || r >= cfg_.num_robots || !free_cell(cell)) continue;
+    if (!(in >> heading) || heading < gdrhcr::kNoHeading || heading > 3) heading = gdrhcr::kNoHeading;
+    if (!(in >> entering) || !free_cell(entering)) entering = -1;
+    LastKnown& k = unreported_[static_cast<int>(r)];
+    k.cell = static_cast<Cell>(cell);
+    k.moving = moving != 0;
+    k.heading = static_cast<gdrhcr::Heading>(heading);
+    k.entering = entering < 0 ? gdrhcr::kNoCell : static_cast<Cell>(entering);
+  }
   if (!unreported_.empty())
     log(LogLevel::kInfo, "robots' snapshot " + snapshot_path_ + ": " + std::to_string(unreported_.size()) +
                              " robots' last cells (for those that do not report after the restart)");

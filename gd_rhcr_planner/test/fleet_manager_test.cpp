@@ -338,6 +338,49 @@ TEST(FleetManager, NoPickupFromAReportTheExecutorRejected) {
   EXPECT_EQ(state(), kPicked);
 }
 
+// Night shift: the planner is killed while robot 1 is on its way from (4,0) into (5,0). The
+// successor places it, until it reports, as an obstacle at both cells (the snapshot keeps the cell
+// it was commanded into and its heading), and sends robot 0 into neither.
+TEST(FleetManager, ARestartedPlannerHoldsTheCellAnUnreportedRobotWasSentInto) {
+  const Grid g = Grid::from_rows({"........", ".@@@@@@.", "........"});
+  const std::string path = journal_path();
+  FleetConfig c = config("pibt", 2);
+  c.task_store = path;
+  c.offline_timeout = 0.5;
+  {
+    FleetManager before(g, c);
+    std::string err;
+    ASSERT_TRUE(before.update_robot(0, 0, 0, false, false, 0.0, err));
+    ASSERT_TRUE(before.update_robot(1, 4, 0, false, false, 0.0, err));
+    ASSERT_TRUE(before.submit({7, 0, 7, 2, 0, 0}).accepted);
+    for (int t = 0; t < 3; ++t) before.tick(0.1 * t, 0.1 * t, false);
+    bool sent = false;
+    for (const auto& cmd : before.tick(0.3, 0.3, false).commands) sent |= cmd.robot == 1 && cmd.cell == g.cell(5, 0);
+    ASSERT_TRUE(sent) << "robot 1 is not on its way into (5,0)";
+  }  // killed; robot 1 never reports again
+  std::vector<std::string> warnings;
+  FleetManager after(g, c, [&](LogLevel l, const std::string& m) {
+    if (l == LogLevel::kWarn) warnings.push_back(m);
+  });
+  SimFleet sim{after, {{0, 0}}};
+  std::string err;
+  for (int t = 0; t < 60; ++t) {
+    sim.now += 0.1;
+    ASSERT_TRUE(after.update_robot(0, sim.xy[0].first, sim.xy[0].second, false, false, sim.now, err)) << err;
+    for (const auto& cmd : after.tick(sim.now, sim.now, false).commands) {
+      if (cmd.robot != 0) continue;
+      EXPECT_NE(cmd.cell, g.cell(4, 0)) << "tick " << t;
+      EXPECT_NE(cmd.cell, g.cell(5, 0)) << "robot 0 sent into the cell robot 1 was entering, tick " << t;
+      sim.xy[0] = {g.x_of(cmd.cell), g.y_of(cmd.cell)};
+    }
+  }
+  bool placed = false;
+  for (const auto& w : warnings) placed |= w.find("an obstacle at (4,0) and (5,0)") != std::string::npos;
+  EXPECT_TRUE(placed) << "robot 1 not placed at both of its cells";
+  std::remove(path.c_str());
+  std::remove((path + ".robots").c_str());
+}
+
 // Night shift: a robot whose reports do not fit (here: the cell another robot stands in) for
 // longer than ~offline_timeout gives its task back, which goes to another robot; once its reports
 // fit again it takes tasks again. (Before, it kept its task for as long as it stayed so.)

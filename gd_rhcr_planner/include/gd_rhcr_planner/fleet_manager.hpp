@@ -238,7 +238,13 @@ class FleetManager {
   std::vector<double> inconsistent_since_;  // per robot: when its reports stopped fitting (-1: they fit)
   std::string last_ignored_;        // why the last ignored report was ignored
   std::string snapshot_path_;       // the robots' cells for a successor (with the task store only)
-  std::map<int, std::pair<Cell, bool>> unreported_;  // from the snapshot: robot -> (cell, moving)
+  struct LastKnown {
+    Cell cell = gdrhcr::kNoCell;
+    bool moving = false;
+    Cell entering = gdrhcr::kNoCell;  // the cell it was commanded into, while moving
+    gdrhcr::Heading heading = gdrhcr::kNoHeading;
+  };
+  std::map<int, LastKnown> unreported_;  // from the snapshot: robot -> where it was last known
   uint64_t rejected_tasks_ = 0;
   std::string last_rejected_task_;
 };
