@@ -420,7 +420,9 @@ class FleetSim(object):
                 ep = self.slip.pending_slip(i, e)
                 if ep is None:
                     continue
-                claimed = set(cells) | set(targets) | set(entering)
+                # Never a cell another robot holds, enters or was commanded into (also one turning
+                # before it moves there, or delayed).
+                claimed = set(cells) | set(targets) | set(entering) | set(o.cmd for o in self.robots if o.cmd is not None)
                 alt = slip_target(cells[i], targets[i], self.grid.is_free, claimed)
                 rospy.logwarn("fleet_sim: robot %d slips: commanded %s -> %s, goes to %s", i, cells[i],
                               targets[i], alt if alt else "nowhere (stays)")
