@@ -79,7 +79,7 @@ from nav_msgs.msg import OccupancyGrid
 
 from gd_rhcr_msgs.msg import RobotState, RobotStateArray, StepCommandArray
 from fleet_sim.faults import FaultSchedule, RandomDelays, slip_target
-from fleet_sim.grid_frame import GridFrame, adjacent_or_same, resolve_moves
+from fleet_sim.grid_frame import GridFrame, adjacent_or_same, resolve_moves, tick_entry_taken
 
 
 def yaw_quaternion(yaw):
@@ -348,12 +348,12 @@ class FleetSim(object):
                 r = self.robots[c.robot_id]
                 if self.dead(r.id, now) or r.id in self.absent:
                     continue  # a dead or absent robot hears nothing
-                # Updates carry the tick they follow: tick k's array arriving after an update of
-                # tick k for this robot is older than that update (two topics, no order between
-                # them), and is not taken.
-                if tick and r.update_tick >= msg.tick:
+                # Updates carry the tick they follow (see tick_entry_taken).
+                if tick and not tick_entry_taken(r.update_tick, msg.tick):
                     continue
-                if not tick:
+                if tick and msg.tick < r.update_tick:
+                    r.update_tick = -1  # the manager restarted: its ticks count from 1 again
+                elif not tick:
                     r.update_tick = msg.tick
                 target = (c.next_x, c.next_y)
                 heading = c.next_heading - 1 if 1 <= c.next_heading <= 4 else None

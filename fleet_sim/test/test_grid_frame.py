@@ -5,7 +5,7 @@ import math
 import unittest
 
 from fleet_sim.faults import FaultSchedule, RandomDelays, slip_target
-from fleet_sim.grid_frame import GridFrame, resolve_moves
+from fleet_sim.grid_frame import GridFrame, resolve_moves, tick_entry_taken
 
 
 class GridFrameTest(unittest.TestCase):
@@ -47,6 +47,19 @@ class ResolveMovesTest(unittest.TestCase):
         moves, blocked = resolve_moves(cells, targets, [False, True, False], reserved=[(1, 0)])
         self.assertEqual(moves, set())
         self.assertEqual(blocked, {0, 2})
+
+
+class TickEntryTest(unittest.TestCase):
+    def test_an_array_older_than_the_update_is_dropped_and_a_restarted_manager_is_followed(self):
+        self.assertTrue(tick_entry_taken(-1, 1))      # no update yet
+        self.assertFalse(tick_entry_taken(800, 800))  # tick 800's array after an update of tick 800
+        self.assertFalse(tick_entry_taken(800, 799))
+        self.assertTrue(tick_entry_taken(800, 801))
+        # The planner was killed at tick 800 and respawned: its ticks count from 1 again, and a
+        # robot that dropped them would ignore it for 800 ticks (the 20-minute soak at fc1d387
+        # delivered nothing after its first restart).
+        self.assertTrue(tick_entry_taken(800, 1))
+        self.assertTrue(tick_entry_taken(800, 797))
 
 
 class SlipTest(unittest.TestCase):

@@ -38,6 +38,15 @@ class GridFrame(object):
         return x, self.height - 1 - int(math.floor((wy - self.origin_y) / self.resolution))
 
 
+def tick_entry_taken(update_tick, tick):
+    """Whether a robot takes its entry of a tick-`tick` step_commands array after its last
+    step_command_updates entry followed tick `update_tick` (-1: none). The two topics are not
+    ordered: an array of that tick (or the one before) arriving after the update is older than the
+    update and is not taken. A tick number further back means the manager restarted (its ticks
+    count from 1 again): taken."""
+    return not (0 <= update_tick - tick <= 1)
+
+
 def adjacent_or_same(a, b):
     return abs(a[0] - b[0]) + abs(a[1] - b[1]) <= 1
 
