@@ -13,7 +13,8 @@
 # the interlock would have stopped, 0 lost tasks (every accepted task delivered or still open in
 # the planner), 0 accepted tasks failed, the planner restarted as often as it was killed, the
 # p99 tick callback under the plan deadline, and the planner's RSS at the end within 10% of its
-# RSS after warm-up (WARM s).
+# RSS after warm-up (WARM s), and the fleet delivering after every restart at half its rate
+# before the first kill or more.
 #   bash scripts/soak_night_shift.sh                       # ROBOTS=500 DURATION=3600 SEED=1
 #   ROBOTS=300 DURATION=600 bash scripts/soak_night_shift.sh
 # Environment: ROBOTS (500), DURATION (s, 3600), SEED (1), KILL_PERIOD (900 s; for runs shorter
@@ -83,7 +84,7 @@ for _ in $(seq 60); do
   kill -0 "$launch" 2>/dev/null || { tail -30 "$run/launch.log"; echo "soak_night_shift: launch died" >&2; exit 1; }
 done
 start=$(date +%s)
-kills=0 paused=0 stopped=0 operator_errors=0
+kills=0 paused=0 stopped=0 operator_errors=0 kill_times=
 next_kill=$KILL_PERIOD
 pause_at=$((DURATION * 20 / 100))
 stop_at=$((DURATION * 45 / 100))
@@ -92,7 +93,7 @@ while kill -0 "$launch" 2>/dev/null; do
   if [ "$t" -ge "$next_kill" ] && [ "$t" -lt "$DURATION" ]; then
     pid=$(planner_pid)
     if [ -n "$pid" ]; then
-      kill -9 "$pid" && kills=$((kills + 1)) && echo "soak_night_shift: ${t} s: planner $pid SIGKILLed"
+      kill -9 "$pid" && kills=$((kills + 1)) && kill_times="$kill_times $t" && echo "soak_night_shift: ${t} s: planner $pid SIGKILLed"
     fi
     next_kill=$((next_kill + KILL_PERIOD))
   fi
@@ -114,9 +115,9 @@ if [ ! -s "$soak_json" ]; then
 fi
 
 python3 - "$soak_json" "$OUT" "$ROBOTS" "$DURATION" "$SEED" "$kills" "$KILL_PERIOD" "$operator_errors" \
-  "$(git -C "$top" rev-parse --short HEAD 2>/dev/null || echo unknown)" <<'PY'
-import json, sys
-soak_path, out, robots, duration, seed, kills, kill_period, operator_errors, commit = sys.argv[1:]
+  "$(git -C "$top" rev-parse --short HEAD 2>/dev/null || echo unknown)" "$kill_times" "$run/launch.log" <<'PY'
+import json, re, sys
+soak_path, out, robots, duration, seed, kills, kill_period, operator_errors, commit, kill_times, log = sys.argv[1:]
 s = json.load(open(soak_path))
 t, sa, ps, m = s["tasks"], s["safety"], s["planner_stats"], s["memory"]
 sim, pd = s["fleet_sim_diagnostics"], s["planner_diagnostics"]
@@ -140,6 +141,18 @@ r = {
     "throughput_per_tick": (t["delivered"] / float(s["ticks"])) if s["ticks"] else None,
     "soak": s,
 }
+# Deliveries per second before the first kill and after each restart (from 60 s after the kill to
+# the next kill or the end), from the soak's progress lines: a respawned planner must get the
+# fleet going again, not only come back.
+progress = [(float(a), int(b)) for a, b in re.findall(r"soak: (\d+) s, \d+ ticks, \d+ robot-steps, (\d+) tasks delivered",
+                                                      open(log).read())]
+def rate(lo, hi):
+    pts = [p for p in progress if lo <= p[0] <= hi]
+    return (pts[-1][1] - pts[0][1]) / (pts[-1][0] - pts[0][0]) if len(pts) >= 2 and pts[-1][0] > pts[0][0] else None
+kt = [float(k) for k in kill_times.split()]
+bounds = kt + [float(duration)]
+r["deliveries_per_s"] = {"before_first_kill": rate(bounds[0] / 2, bounds[0]),
+                         "after_restarts": [rate(k + 60, nxt) for k, nxt in zip(kt, bounds[1:])]}
 checks = [
     ("collisions", r["collisions"] == 0), ("swaps", r["swaps"] == 0), ("jumps", r["jumps"] == 0),
     ("interlock acts", r["interlock_would_act"] == 0), ("lost tasks", r["lost_tasks"] == 0),
@@ -149,6 +162,9 @@ checks = [
      and r["tick_p99_s"] <= r["plan_deadline_s"]),
     ("RSS flat after warm-up (10%)", r["planner_rss_mb_warm"] and r["planner_rss_mb_end"]
      and r["planner_rss_mb_end"] <= 1.1 * r["planner_rss_mb_warm"]),
+    ("deliveries after every restart (at least half the rate before the first kill)",
+     r["deliveries_per_s"]["before_first_kill"] and all(
+         x is not None and x >= 0.5 * r["deliveries_per_s"]["before_first_kill"] for x in r["deliveries_per_s"]["after_restarts"])),
     ("soak's own checks", s["pass"]),
 ]
 r["failures"] = [name for name, ok in checks if not ok]
