@@ -228,15 +228,11 @@ bool Executor::take_heading(int r, const RobotRecord& rec, TickOutput& out) {
 // once x is free).
 bool Executor::take_unexpected_cell(int r, Cell x, const std::vector<RobotRecord>& robots, TickOutput& out) {
   Track& t = tracks_[r];
-  int other = holder_of(x, r);
   // One move from where it was, or from the cell it was sent to (it arrived, unreported, and slipped).
   const bool reachable =
       grid_.step_allowed(t.cell, x) || (t.dispatched && grid_.step_allowed(t.path.front().cell, x));
-  if (other >= 0 && reachable && withdraw_move(other, x, r, robots)) {
-    out.warnings.push_back(who(other) + "'s move into " + grid_.describe(x) + " is taken back: " + who(r) +
-                           " slipped into it");
-    other = -1;
-  }
+  bool withdrawn = false;
+  const int other = reachable ? yield_cell(r, x, robots, "slipped into it", out, withdrawn) : holder_of(x, r);
   if (other < 0 && reachable) {
     out.warnings.push_back(who(r) + " reports " + grid_.describe(x) + ", not the cell it was commanded (" +
                            grid_.describe(t.dispatched ? t.path.front().cell : t.cell) + "): replanned from there");
@@ -264,19 +260,24 @@ bool Executor::take_entering(int r, Cell x, const std::vector<RobotRecord>& robo
   Track& t = tracks_[r];
   if (t.claimed == x) return false;
   bool withdrawn = false;
-  int other = holder_of(x, r);
-  if (other >= 0 && withdraw_move(other, x, r, robots)) {
-    out.warnings.push_back(who(other) + "'s move into " + grid_.describe(x) + " is taken back: " + who(r) +
-                           " is moving into it");
-    withdrawn = true;
-    other = -1;
-  }
+  const int other = yield_cell(r, x, robots, "is moving into it", out, withdrawn);
   out.warnings.push_back(who(r) + " is moving into " + grid_.describe(x) + ", not the cell it was commanded (" +
                          grid_.describe(t.dispatched ? t.path.front().cell : t.cell) + ")" +
                          (other >= 0 ? ", which robot " + std::to_string(other) + " holds" : std::string()) +
                          ": an obstacle at both cells until it stops");
   t.claimed = x;
   return withdrawn;
+}
+
+// The robot other than r that holds x (-1: none), after taking back, for r, a move into x that its
+// robot has not started (withdraw_move; warned with what r did, `how`; `withdrawn` set).
+int Executor::yield_cell(int r, Cell x, const std::vector<RobotRecord>& robots, const char* how, TickOutput& out,
+                         bool& withdrawn) {
+  const int other = holder_of(x, r);
+  if (other < 0 || !withdraw_move(other, x, r, robots)) return other;
+  out.warnings.push_back(who(other) + "'s move into " + grid_.describe(x) + " is taken back: " + who(r) + " " + how);
+  withdrawn = true;
+  return -1;
 }
 
 // Robot q was commanded into x but reports at rest in its own cell, which it has not left, and no

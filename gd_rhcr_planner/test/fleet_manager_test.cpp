@@ -338,15 +338,28 @@ TEST(FleetManager, NoPickupFromAReportTheExecutorRejected) {
   EXPECT_EQ(state(), kPicked);
 }
 
+// Two corridors joined at both ends, and two robots whose manager journals to `path` and waits
+// 0.5 s for robots that have not reported after a restart.
+namespace {
+
+Grid loop_corridor() { return Grid::from_rows({"........", ".@@@@@@.", "........"}); }
+
+FleetConfig restart_config(const std::string& path) {
+  FleetConfig c = config("pibt", 2);
+  c.task_store = path;
+  c.offline_timeout = 0.5;
+  return c;
+}
+
+}  // namespace
+
 // Night shift: the planner is killed while robot 1 is on its way from (4,0) into (5,0). The
 // successor places it, until it reports, as an obstacle at both cells (the snapshot keeps the cell
 // it was commanded into and its heading), and sends robot 0 into neither.
 TEST(FleetManager, ARestartedPlannerHoldsTheCellAnUnreportedRobotWasSentInto) {
-  const Grid g = Grid::from_rows({"........", ".@@@@@@.", "........"});
+  const Grid g = loop_corridor();
   const std::string path = journal_path();
-  FleetConfig c = config("pibt", 2);
-  c.task_store = path;
-  c.offline_timeout = 0.5;
+  const FleetConfig c = restart_config(path);
   {
     FleetManager before(g, c);
     std::string err;
@@ -400,20 +413,18 @@ TEST(FleetManager, ARobotWhoseReportsDoNotFitForTooLongGivesItsTaskBack) {
     return -2;
   };
   ASSERT_EQ(owner(), 0);
-  std::string err;
-  for (int k = 0; k < 30 && owner() == 0; ++k) {  // 0.1 s apart: robot 0 reports robot 1's cell
+  auto misreport = [&] {  // 0.1 s on: robot 0 reports robot 1's cell, robot 1 its own, a tick
+    std::string err;
     sim.now += 0.1;
     ASSERT_TRUE(fm.update_robot(0, 11, 4, false, false, sim.now, err)) << err;
     ASSERT_TRUE(fm.update_robot(1, sim.xy[1].first, sim.xy[1].second, false, false, sim.now, err)) << err;
     fm.tick(sim.now, sim.now, false);
+  };
+  for (int k = 0; k < 30 && owner() == 0; ++k) {
+    misreport();
     if (k < 9) EXPECT_EQ(owner(), 0) << "taken before ~offline_timeout, at report " << k;
   }
-  for (int t = 0; t < 3 && owner() != 1; ++t) {
-    sim.now += 0.1;
-    ASSERT_TRUE(fm.update_robot(0, 11, 4, false, false, sim.now, err)) << err;
-    ASSERT_TRUE(fm.update_robot(1, sim.xy[1].first, sim.xy[1].second, false, false, sim.now, err)) << err;
-    fm.tick(sim.now, sim.now, false);
-  }
+  for (int t = 0; t < 3 && owner() != 1; ++t) misreport();
   EXPECT_EQ(owner(), 1) << "the task of a robot whose reports do not fit is not handed on";
   sim.now += 0.1;
   TickResult r = fm.tick(sim.now, sim.now, true);
@@ -427,11 +438,9 @@ TEST(FleetManager, ARobotWhoseReportsDoNotFitForTooLongGivesItsTaskBack) {
 // Night shift: the planner is killed while a robot is silent. Its successor must not send the
 // others through the cell the silent robot stands in, though that robot never reports again.
 TEST(FleetManager, ARestartedPlannerKeepsARobotThatDoesNotReportWhereItWasLastKnown) {
-  const Grid g = Grid::from_rows({"........", ".@@@@@@.", "........"});
+  const Grid g = loop_corridor();
   const std::string path = journal_path();
-  FleetConfig c = config("pibt", 2);
-  c.task_store = path;
-  c.offline_timeout = 0.5;
+  const FleetConfig c = restart_config(path);
   {
     FleetManager before(g, c);
     std::string err;

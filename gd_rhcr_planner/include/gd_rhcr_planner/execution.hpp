@@ -180,6 +180,8 @@ class Executor {
   bool rotation() const { return cfg_.action_model == gdrhcr::ActionModel::kRotation; }
   bool take_unexpected_cell(int r, Cell x, const std::vector<RobotRecord>& robots, TickOutput& out);
   bool take_entering(int r, Cell x, const std::vector<RobotRecord>& robots, TickOutput& out);
+  int yield_cell(int r, Cell x, const std::vector<RobotRecord>& robots, const char* how, TickOutput& out,
+                 bool& withdrawn);
   bool withdraw_move(int q, Cell x, int r, const std::vector<RobotRecord>& robots);
   bool set_health(int r, RobotHealth h, TickOutput& out);
   void resync();
