@@ -76,7 +76,9 @@ hold_fleet() {
   sleep 10
   call "$3" "$5" || operator_errors=$((operator_errors + 1))
 }
-planner_pid() { pgrep -f "gd_rhcr_planner_node .*__name:=gd_rhcr_planner" | head -1; }
+# The planner node of this run only: a child of this run's roslaunch (other runs on other ports
+# have planner nodes of the same name).
+planner_pid() { pgrep -P "$launch" -f "gd_rhcr_planner_node .*__name:=gd_rhcr_planner" | head -1; }
 
 # Wait for the first step of the fleet (the soak's clock starts there).
 for _ in $(seq 60); do
