@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "gdrhcr/mapf_in_rotation.hpp"
@@ -40,6 +41,23 @@ void PibtStep::update_priority(const WorldView& world, int i, Cell goal) {
   last_goal_[i] = goal;
 }
 
+// Steps the agent has stood in its cell; a second call in the same timestep changes nothing.
+void PibtStep::update_standing(const WorldView& world, int i) {
+  if (standing_t_[i] == world.timestep) return;
+  const bool stood = standing_at_[i] == world.positions[i] && standing_t_[i] == world.timestep - 1;
+  standing_[i] = stood ? standing_[i] + 1 : 0;
+  standing_at_[i] = world.positions[i];
+  standing_t_[i] = world.timestep;
+}
+
+// The swap: in the mapf model always (when on); in the rotation model for an agent that has stood
+// in its cell rotation_swap_wait steps, and then until its partner no longer needs it.
+bool PibtStep::swap_allowed(const WorldView& world, int ai) const {
+  if (!opt_.swap) return false;
+  if (!world.rotation()) return true;
+  return opt_.rotation_swap_wait > 0 && (swapping_[ai] || standing_[ai] >= opt_.rotation_swap_wait);
+}
+
 void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::vector<int>& agents,
                     const std::vector<std::pair<Cell, Cell>>& fixed_moves,
                     const std::vector<Cell>* preferred) {
@@ -51,6 +69,9 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
     goal_of_.resize(n, kNoCell);
     last_goal_.resize(n, kNoCell);
   }
+  if (static_cast<int>(standing_.size()) < n)
+    standing_.resize(n, 0), standing_at_.resize(n, kNoCell), standing_t_.resize(n, std::numeric_limits<int>::min()),
+        swapping_.resize(n, 0);
   preferred_ = preferred;
   immovable_ = world.immovable;
   if (table_id_ != world.dist.id()) {  // rows kept from another table: drop them
@@ -67,6 +88,7 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   for (int i : order_) {
     const Cell g = world.goals[i].empty() ? world.positions[i] : world.goals[i][0];
     update_priority(world, i, g);
+    update_standing(world, i);
     goal_of_[i] = g;
     if (!rows_[i] || rows_[i]->goal() != g) rows_[i] = world.dist.row(g);
     occupied_now_[world.positions[i]] = i;
@@ -181,10 +203,12 @@ bool PibtStep::push(const WorldView& world, int ai, int aj, std::vector<Cell>& n
   order_candidates(world, ai, cand, m);
   // Swap: the agent on the best cell must get past this one; walk away and pull it along.
   int partner = -1;
-  if (opt_.swap && !world.rotation()) {  // off in the rotation model (it holds agents back there)
+  if (swap_allowed(world, ai)) {
     partner = swap_partner(world, ai, cand[0]);
     if (partner >= 0 && next[partner] != kNoCell) partner = -1;
-    if (partner >= 0) std::reverse(cand, cand + m);
+    if (partner >= 0 && !world.rotation()) std::reverse(cand, cand + m);
+    if (partner >= 0 && world.rotation()) retreat_order(here, cand, m);
+    if (world.rotation()) swapping_[ai] = partner >= 0;
   }
   for (int k = 0; k < m; ++k) {
     const Cell u = cand[k];
@@ -207,6 +231,14 @@ bool PibtStep::push(const WorldView& world, int ai, int aj, std::vector<Cell>& n
   occupied_next_[here] = ai;
   next[ai] = here;
   return false;
+}
+
+// The rotation model's swap: retreat into the nearest other cell, staying second to last and the
+// best cell last. The mapf model reverses the whole order; here that would flip with each quarter
+// turn (the farthest cell changes with the heading) and the agent would turn to and fro.
+void PibtStep::retreat_order(Cell here, Cell* cand, int m) const {
+  std::rotate(cand, cand + 1, cand + m);  // best last
+  std::stable_partition(cand, cand + m - 1, [&](Cell c) { return c != here; });  // here just before it
 }
 
 // Cells next to `at` an agent could step aside into, other than `except` (where the other agent

@@ -44,10 +44,13 @@ std::string rule_thousands(const std::string& param, const MapFacts& f, const Pl
 std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerParams&) {
   return !thousands(f) && many_cut_cells(f) ? "8" : "0";
 }
-// Fleets filling more than 90% of the free cells: guidance paths cannot be kept, PIBT alone moves.
+// Fleets filling more than 90% of the free cells: guidance paths cannot be kept, PIBT alone moves,
+// and no agent retreats to let another pass (the rotation model's swap, after 20 steps standing).
 constexpr double kCrowdedFleet = 0.9;
-std::string rule_crowded(const std::string&, const MapFacts& f, const PlannerParams&) {
-  return f.fleet_share() > kCrowdedFleet ? "none" : "local";
+std::string rule_crowded(const std::string& param, const MapFacts& f, const PlannerParams&) {
+  const bool crowded = f.fleet_share() > kCrowdedFleet;
+  if (param == "rotation-swap-wait") return crowded ? "0" : "20";
+  return crowded ? "none" : "local";
 }
 std::string rule_window(const std::string&, const MapFacts& f, const PlannerParams&) {
   return thousands(f) || many_cut_cells(f) ? "20" : "30";
@@ -75,7 +78,8 @@ const std::vector<ParamRule>& param_rules() {
        std::string(kRulesFigure) + "motion-forecast", rule_forecast},
       {"crowded-fleet",
        "fleets holding more than 90% of the free cells move by PIBT alone (guidance none): paths around others "
-       "cannot be followed there",
+       "cannot be followed there; and in the rotation model no agent retreats for another (rotation-swap-wait 0, "
+       "else 20 steps standing)",
        std::string(kRulesFigure) + "crowded-fleet", rule_crowded},
       {"guidance-window",
        "30 steps on maps without many cut cells (head-on meetings in long aisles show up late), up to 2,000 agents; "
@@ -117,7 +121,10 @@ ParamSpec preset_row() {
 
 // PIBT's techniques (the PIBT baseline and GD-RHCR's secondary solver). The paper's PIBT has no swap.
 std::vector<ParamSpec> pibt_rows() {
-  return {flag("swap", "1", "LaCAM*'s swap operation (mapf model only)", "0"),
+  return {flag("swap", "1", "LaCAM*'s swap operation (in the rotation model see rotation-swap-wait)", "0"),
+          integer("rotation-swap-wait", 0, 1000, "",
+                  "rotation model: the swap applies to an agent that has stood in its cell this many steps (0 = never)",
+                  "crowded-fleet", "0"),
           flag("priority-reset", "1", "reset an agent's priority when it reaches a goal"),
           choice("tie-break", {"free-first", "random"}, "free-first",
                  "order among equally near cells: an unoccupied one first, or random"),

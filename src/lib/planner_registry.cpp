@@ -20,6 +20,7 @@ PibtOptions pibt_options(const PlannerParams& v) {
   o.swap = v.flag("swap");
   o.tie_break = v.text("tie-break") == "random" ? PibtOptions::TieBreak::kRandom : PibtOptions::TieBreak::kFreeFirst;
   o.rotation = v.text("rotation-pibt") == "cells" ? PibtOptions::Rotation::kCells : PibtOptions::Rotation::kOperations;
+  o.rotation_swap_wait = v.integer("rotation-swap-wait");
   return o;
 }
 

@@ -206,3 +206,52 @@ TEST(RotationPlanners, OperationsStopAtTheStepBudgetAndTheOthersWait) {
     }
   }
 }
+
+namespace {
+// A dead end D off a one-lane corridor with a junction two cells away: B stands in D and must
+// leave through the cell where A, which wants D, stands facing it. Returns the step by which both
+// reached their goals, or -1 within `steps`. PIBT's priorities of two agents that have not reached
+// a goal keep their order, so with A first A waits for D for ever unless it retreats (the swap).
+int dead_end_meeting(uint64_t seed, const std::string& swap_wait, int steps) {
+  const Grid g = Grid::from_rows({"@@@@@@@", "@.....@", "@@@.@@@", "@@@.@@@", "@.....@", "@@@@@@@"});
+  DistTable dist(g, ActionModel::kRotation);
+  Params p;
+  p.set("rotation-swap-wait", swap_wait);
+  auto planner = make_planner("pibt", p, g, 2, seed, ActionModel::kRotation);
+  StepValidator validator(g, ActionModel::kRotation);
+  std::vector<Cell> pos = {g.cell(2, 1), g.cell(1, 1)};  // A next to the dead end, B in it
+  std::vector<Heading> heads = {kWest, kEast};
+  const std::vector<std::vector<Cell>> goals = {{g.cell(1, 1)}, {g.cell(1, 4)}};
+  bool reached[2] = {false, false};
+  for (int t = 0; t < steps; ++t) {
+    WorldView w{g, dist, t, pos, goals};
+    w.action_model = ActionModel::kRotation;
+    std::vector<Heading> next_heads(2, kNoHeading);
+    w.headings = &heads;
+    w.next_headings = &next_heads;
+    std::vector<Cell> next(2, kNoCell);
+    planner->plan_step(w, next);
+    const auto bad = validator.check(pos, next, &heads, &next_heads);
+    EXPECT_FALSE(bad) << bad->describe(g, t);
+    if (bad) return -1;
+    pos = next, heads = next_heads;
+    for (int i = 0; i < 2; ++i) reached[i] = reached[i] || pos[i] == goals[i][0];
+    if (reached[0] && reached[1]) return t + 1;
+  }
+  return -1;
+}
+}  // namespace
+
+TEST(RotationPlanners, AnAgentBlockingADeadEndRetreatsAfterStandingLong) {
+  // Without the swap some seeds put A first and the pair never moves again (MR23-I-05 lost a
+  // corner of the map this way); with the default (rule crowded-fleet: 20 steps standing) A
+  // retreats, B leaves and A reaches the dead end on every seed.
+  int deadlocked = 0;
+  for (uint64_t seed = 1; seed <= 12; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    deadlocked += dead_end_meeting(seed, "0", 300) < 0;
+    const int done = dead_end_meeting(seed, "20", 300);
+    EXPECT_GT(done, 0) << "the pair never got past each other";
+  }
+  EXPECT_GT(deadlocked, 0) << "no seed put the agent facing the dead end first: the test shows nothing";
+}

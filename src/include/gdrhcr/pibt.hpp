@@ -58,6 +58,11 @@ struct PibtOptions {
   // so its time is linear in the agents, as in the mapf model.
   enum class Rotation { kOperations, kCells };
   Rotation rotation = Rotation::kOperations;
+  // Rotation model, kCells: the swap starts only for an agent that has stood in its cell this many
+  // steps (0: never), and goes on while its partner still needs it. Used at every step it holds
+  // agents back (a retreat costs turns); without it an agent heading into a dead end whose
+  // occupant can leave only through its cell waits for ever, and the agents queued behind it.
+  int rotation_swap_wait = 0;
 };
 
 // PIBT as published (the paper configuration and RHCR's fallback): no swap.
@@ -130,11 +135,14 @@ class PibtStep {
   void execute_with_turns(const WorldView& world, std::vector<Cell>& next) const;
   void order_candidates_with_turns(const WorldView& world, int ai, Cell* cand, int m);
   int swap_partner(const WorldView& world, int ai, Cell best) const;
+  void retreat_order(Cell here, Cell* cand, int m) const;
   bool needs_swap(Cell pusher_at, Cell puller_at, const DistRow& pusher_row,
                   const DistRow& puller_row) const;
   bool can_swap(Cell pusher_at, Cell puller_at) const;
   int passable_neighbours(Cell at, Cell except, Cell* other) const;
   void update_priority(const WorldView& world, int i, Cell goal);
+  void update_standing(const WorldView& world, int i);
+  bool swap_allowed(const WorldView& world, int ai) const;
 
   const Grid& grid_;
   PibtOptions opt_;
@@ -147,6 +155,11 @@ class PibtStep {
   std::vector<std::shared_ptr<const DistRow>> rows_;
   uint64_t table_id_ = 0;  // the DistTable those rows came from
   std::vector<Cell> goal_of_;                         // each agent's goal, this step
+  // Per agent: steps it has stood in its cell, counted once per timestep (rotation_swap_wait).
+  std::vector<int> standing_;
+  std::vector<Cell> standing_at_;
+  std::vector<int> standing_t_;
+  std::vector<uint8_t> swapping_;  // per agent: retreating with a swap partner (rotation model)
   const std::vector<Cell>* preferred_ = nullptr;
   const std::vector<uint8_t>* immovable_ = nullptr;
   std::vector<int> order_;
