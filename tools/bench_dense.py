@@ -29,6 +29,13 @@ as is and with those arrivals added (our count).
 
     /usr/bin/python3 tools/bench_dense.py --shared --seeds 1 2 3 --lllg /tmp/lllg/build/main \
         --settings warehouse-10-20-10-2-2:800 random-32-32-20:200 --json results/FILE.json
+
+The budget curve (issue 24): GD-RHCR (product default) at each step budget (`--step-budget`,
+ms), in both action models, on LLLG's settings, against PIBT (no budget) and, in the mapf model,
+LLLG's figure; ms per step is the planner's own mean and max wall time.
+
+    /usr/bin/python3 tools/bench_dense.py --budget-curve [--budgets 10 30 100 300 1000]
+        [--models mapf rotation] [--settings MAP:AGENTS ...] [--json results/FILE.json]
 """
 import argparse
 import json
@@ -89,9 +96,49 @@ def run(sim, map_name, agents, args, steps, seed, tasks="random"):
         "map": map_name, "agents": agents, "tasks": tasks, "steps": steps, "seed": seed,
         "args": args, "throughput": d["throughput"], "free_flow": d["free_flow_throughput"],
         "wall_ms": 1000 * d["step_wall_time_mean_s"], "cpu_ms": 1000 * d["step_cpu_time_mean_s"],
+        "wall_ms_max": 1000 * d["step_wall_time_max_s"], "action_model": d.get("action_model", "mapf"),
         "agents_late": d["progress"]["agents_late"], "late_at_end": d["progress"]["late_at_end"],
         "longest_wait": d["progress"]["longest_wait_steps"], "params": d.get("params", {}),
     }
+
+
+def budget_curve(args):
+    """GD-RHCR at each budget and PIBT, per setting and action model (module text)."""
+    rows = []
+    print(f"# GD-RHCR against the step budget: random goals, {args.steps} steps, seed {args.seed}\n")
+    print("| map | agents | model | planner | budget ms | throughput | vs PIBT | vs LLLG | ms/step mean | ms/step max |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for setting in args.settings:
+        m, a = parse_setting(setting)
+        for model in args.models:
+            runs = [("PIBT", None, ["--planner", "pibt"])]
+            runs += [("GD-RHCR", b, ["--planner", "gd-rhcr", "--step-budget", f"{b / 1000:g}"]) for b in args.budgets]
+            pibt = None
+            for label, budget, pargs in runs:
+                r = run(args.sim, m, a, pargs + ["--action-model", model], args.steps, args.seed)
+                r.update(planner=label, budget_ms=budget, action_model=model)
+                pibt = pibt or r["throughput"]
+                lllg = LLLG.get((m, a)) if model == "mapf" else None
+                r["lllg_throughput"] = lllg[0] if lllg else None
+                rows.append(r)
+                vs_lllg = f"{100 * r['throughput'] / lllg[0]:.0f}%" if lllg else "-"
+                print(f"| {m} | {a} | {model} | {label} | {f'{budget:g}' if budget is not None else '-'} | "
+                      f"{r['throughput']:.2f} | {100 * r['throughput'] / pibt:.0f}% | {vs_lllg} | "
+                      f"{r['wall_ms']:.2f} | {r['wall_ms_max']:.1f} |", flush=True)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump({"rows": rows, "steps": args.steps, "seed": args.seed, "budgets_ms": args.budgets}, f, indent=1)
+        print(f"\nwrote {args.json}")
+    return rows
+
+
+def parse_setting(text):
+    m, sep, a = text.rpartition(":")
+    if not sep or not m or not a.isdigit() or int(a) <= 0:
+        raise SystemExit(f"bench_dense: setting '{text}' is not MAP:AGENTS (e.g. random-32-32-20:300)")
+    if not os.path.exists(os.path.join(TOP, "maps", m + ".map")):
+        raise SystemExit(f"bench_dense: setting '{text}': no map maps/{m}.map")
+    return m, int(a)
 
 
 def write_shared_instance(map_name, agents, seed, out, goals_per_agent=40):
@@ -222,7 +269,17 @@ def main(argv=None):
     ap.add_argument("--instance-dir", default=os.path.join(tempfile.gettempdir(), "gdrhcr_shared"))
     ap.add_argument("--planner-args", default="--planner gd-rhcr",
                     help="gdrhcr_sim options for --shared, one string (--planner-args='--planner gd-rhcr --V 3')")
+    ap.add_argument("--budget-curve", action="store_true", help="GD-RHCR at each --budgets, both --models (module text)")
+    ap.add_argument("--budgets", nargs="+", type=float, default=[10, 30, 100, 300, 1000], help="ms per step")
+    ap.add_argument("--models", nargs="+", choices=["mapf", "rotation"], default=["mapf", "rotation"])
     args = ap.parse_args(argv)
+    if args.budget_curve:
+        if any(b <= 0 for b in args.budgets):
+            raise SystemExit("bench_dense: --budgets must be positive (ms per step)")
+        if not os.access(args.sim, os.X_OK):
+            raise SystemExit(f"bench_dense: simulator {args.sim} not found or not executable (build it: bash scripts/build_core.sh)")
+        budget_curve(args)
+        return
     if args.shared:
         args.planner_args = shlex.split(args.planner_args)
         shared(args)
