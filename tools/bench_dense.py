@@ -113,12 +113,13 @@ def budget_curve(args):
         for model in args.models:
             runs = [("PIBT", None, ["--planner", "pibt"])]
             runs += [("GD-RHCR", b, ["--planner", "gd-rhcr", "--step-budget", f"{b / 1000:g}"]) for b in args.budgets]
-            pibt = None
+            lllg = LLLG.get((m, a)) if model == "mapf" else None
+            pibt = None  # the first run's throughput, the reference of the rest
             for label, budget, pargs in runs:
                 r = run(args.sim, m, a, pargs + ["--action-model", model], args.steps, args.seed)
                 r.update(planner=label, budget_ms=budget, action_model=model)
-                pibt = pibt or r["throughput"]
-                lllg = LLLG.get((m, a)) if model == "mapf" else None
+                if pibt is None:
+                    pibt = r["throughput"]
                 r["lllg_throughput"] = lllg[0] if lllg else None
                 rows.append(r)
                 vs_lllg = f"{100 * r['throughput'] / lllg[0]:.0f}%" if lllg else "-"
@@ -227,8 +228,7 @@ def shared(args):
     print("|---|---|---|---|---|---|---|---|---|---|")
     rows = []
     for setting in args.settings:
-        m, a = setting.split(":")
-        a = int(a)
+        m, a = parse_setting(setting)
         for seed in args.seeds:
             base = os.path.join(args.instance_dir, f"{m}_{a}_s{seed}")
             problem, scen = write_shared_instance(m, a, seed, base)

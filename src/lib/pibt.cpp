@@ -88,7 +88,7 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   for (int i : order_) {
     const Cell g = world.goals[i].empty() ? world.positions[i] : world.goals[i][0];
     update_priority(world, i, g);
-    update_standing(world, i);
+    if (world.rotation()) update_standing(world, i);  // only the rotation model's swap reads it
     goal_of_[i] = g;
     if (!rows_[i] || rows_[i]->goal() != g) rows_[i] = world.dist.row(g);
     occupied_now_[world.positions[i]] = i;
