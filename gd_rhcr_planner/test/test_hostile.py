@@ -192,7 +192,10 @@ class Hostile(unittest.TestCase):
         self.ignored_reason("out of order")
         self.states([self.robot(5, *self.w.get("cells")[5], mode=77)])
         self.ignored_reason("unknown mode")
-        x6, y6 = self.w.get("cells")[6]
+        # A free cell with a free cell two columns on: an entering cell that is on the map and free
+        # but not next to the robot's cell (robot 6's own cell may have a wall two columns on).
+        free = set(self.free)
+        x6, y6 = next((x, y) for x, y in self.free if (x + 2, y) in free)
         self.states([self.robot(6, x6, y6, moving=True, entering_known=True, entering_x=x6 + 2, entering_y=y6)])
         self.ignored_reason("is not next to its cell")
         self.states([self.robot(6, x6, y6, moving=True, entering_known=True, entering_x=-5, entering_y=y6)])
