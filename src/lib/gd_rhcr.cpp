@@ -630,6 +630,7 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"guidance_cut_short", guidance_ ? guidance_->cut_short() : 0},
           {"guidance_searches", guidance_ ? guidance_->searches() : 0},
           {"guidance_kept", guidance_ ? guidance_->kept() : 0},
+          {"guidance_refined", guidance_ ? guidance_->refined() : 0},
           {"guidance_expansions", guidance_ ? guidance_->expansions() : 0},
           {"forecast_searches", forecast_ ? forecast_->searches() : 0},
           {"forecast_expansions", forecast_ ? forecast_->expansions() : 0},

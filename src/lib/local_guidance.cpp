@@ -22,6 +22,7 @@ void LocalGuidance::Counts::add(const Counts& o) {
   expansions += o.expansions;
   cut_short += o.cut_short;
   kept += o.kept;
+  refined += o.refined;
 }
 
 LocalGuidance::LocalGuidance(const Grid& grid, int num_agents, LocalGuidanceConfig config)
@@ -171,7 +172,47 @@ void LocalGuidance::update(const WorldView& world, const std::vector<int>& agent
   } else {
     update_in_order(world, *todo, deadline, search_, rng_, counts_);
   }
+  if (!parallel_) refine(world, *todo, deadline, search_, rng_, counts_);
   mark_blocked(world, -1);
+}
+
+// Whether agent i's path meets another path (vertex or swap) anywhere in the window.
+bool LocalGuidance::meets_another(int i) const {
+  const auto& p = path_[i];
+  for (size_t k = 1; k < p.size(); ++k) {
+    if (at(p[k], slot(start_[i] + static_cast<int>(k))) > 1) return true;
+    if (p[k] != p[k - 1] && leaving(p[k], slot(start_[i] + static_cast<int>(k) - 1), dir(p[k], p[k - 1])) > 0)
+      return true;
+  }
+  return false;
+}
+
+int LocalGuidance::refine_passes(std::chrono::steady_clock::time_point deadline) const {
+  if (cfg_.refine >= 0) return cfg_.refine;
+  return deadline != std::chrono::steady_clock::time_point::max() ? LocalGuidanceConfig::kAnytimePasses : 0;
+}
+
+// The anytime part: passes over `agents` in order, each searching again every path that meets
+// another, with every other path in the table, until a pass finds none, the passes run out or
+// the deadline comes.
+void LocalGuidance::refine(const WorldView& world, const std::vector<int>& agents,
+                           std::chrono::steady_clock::time_point deadline, Search& search,
+                           std::minstd_rand& rng, Counts& counts) {
+  const int passes = refine_passes(deadline);
+  for (int pass = 0; pass < passes; ++pass) {
+    bool any = false;
+    for (int i : agents) {
+      if (path_[i].empty() || !meets_another(i)) continue;
+      if (std::chrono::steady_clock::now() >= deadline) return;
+      any = true;
+      ++counts.refined;
+      enroll(i, -1);
+      path_[i].clear();
+      plan(world, i, search, rng, counts);
+      enroll(i, +1);
+    }
+    if (!any) return;
+  }
 }
 
 int LocalGuidance::blocked_steps() const {
@@ -245,7 +286,9 @@ void LocalGuidance::update_banded(const WorldView& world, const std::vector<int>
             const int b = mine[k];
             const uint64_t draw = mix_seed(mix_seed(cfg_.seed, static_cast<uint64_t>(now)), static_cast<uint64_t>(b));
             std::minstd_rand rng(static_cast<std::minstd_rand::result_type>(draw % 2147483646u + 1));
-            update_in_order(world, band_agents_[b], deadline, parallel_->search.local(), rng, counts[b]);
+            Search& search = parallel_->search.local();
+            update_in_order(world, band_agents_[b], deadline, search, rng, counts[b]);
+            refine(world, band_agents_[b], deadline, search, rng, counts[b]);
           }
           GDRHCR_TSAN_RELEASE(this);
         },

@@ -20,6 +20,7 @@ LocalGuidanceConfig rollout_guidance(const MotionForecastConfig& f, LocalGuidanc
   c.recheck = kRecheck;
   c.keep = 0;
   c.phases = 0;
+  c.refine = 0;
   return c;
 }
 }  // namespace

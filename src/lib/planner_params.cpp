@@ -157,6 +157,10 @@ std::vector<ParamSpec> guidance_rows(bool product, const std::string& guidance_d
       integer("lg-blocked-steps", -1, 1000, "-1", "steps a blocked cell counts as taken (-1 = lg-window)"),
       integer("lg-phases", 0, 1000, "", "0: one sequential guidance pass; P >= 2: P phases of map bands in parallel",
               "fleet-of-thousands"),
+      integer("lg-refine", -1, 1000, "-1",
+              "passes searching again the guidance paths that meet another, until the guidance deadline (-1 = 3 "
+              "with a step budget, none without)",
+              "", "0"),
   };
 }
 

@@ -38,6 +38,7 @@ LocalGuidanceConfig guidance_config(const PlannerParams& v, uint64_t seed) {
   c.max_expansions = v.integer("lg-expansions");
   c.blocked_steps = v.integer("lg-blocked-steps");
   c.phases = v.integer("lg-phases");
+  c.refine = v.integer("lg-refine");
   c.seed = seed;
   return c;
 }

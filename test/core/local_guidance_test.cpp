@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 
 #include "solver_scenarios.hpp"
 
@@ -217,6 +218,38 @@ TEST(LocalGuidance, PathEndsOnAGoalAnotherAgentRestsOn) {
   ASSERT_FALSE(path.empty());
   EXPECT_EQ(path.back(), g.cell(1, 0));
   EXPECT_EQ(lg.next_cell(0, 0, pos[0]), g.cell(1, 0));
+}
+
+// Refinement (the anytime part): agent 0 is guided first, through the cell where agent 1 rests
+// (agent 1 is searched later, so agent 0 did not see it). A refinement pass searches agent 0's
+// path again with agent 1's in the table: the detour round the top row (4 steps) is cheaper than
+// the collision (cost 10). Without refinement the paths meet; by default (-1) the passes run only
+// when the update has a deadline (a step budget).
+TEST(LocalGuidance, RefinementSearchesAgainAPathThatMeetsALaterOne) {
+  Grid g = Grid::from_rows({".....", ".@@@.", "....."});
+  DistTable dist(g);
+  std::vector<Cell> pos = {g.cell(0, 2), g.cell(2, 2)};
+  std::vector<std::vector<Cell>> goals = {{g.cell(4, 2)}, {g.cell(2, 2)}};
+  WorldView w{g, dist, 0, pos, goals};
+  auto through_rester = [&](int refine, std::chrono::steady_clock::time_point deadline) {
+    LocalGuidanceConfig cfg;
+    cfg.window = 12;
+    cfg.collision_cost = 10;
+    cfg.refine = refine;
+    LocalGuidance lg(g, 2, cfg);
+    lg.update(w, {0, 1}, deadline);
+    const auto a = lg.path_from(0, 0);
+    EXPECT_TRUE(is_walk(g, a));
+    EXPECT_EQ(a.back(), g.cell(4, 2));
+    return std::make_pair(std::count(a.begin(), a.end(), g.cell(2, 2)) > 0, lg.refined());
+  };
+  const auto never = std::chrono::steady_clock::time_point::max();
+  const auto later = std::chrono::steady_clock::now() + std::chrono::hours(1);
+  EXPECT_EQ(through_rester(0, never), std::make_pair(true, 0L));
+  EXPECT_EQ(through_rester(1, never).first, false);
+  EXPECT_GE(through_rester(1, never).second, 1L);
+  EXPECT_EQ(through_rester(-1, never), std::make_pair(true, 0L));
+  EXPECT_EQ(through_rester(-1, later).first, false);
 }
 
 // The planner-restart rostest's deadlock, in the core: a robot delivering to a cell where an

@@ -31,6 +31,14 @@
 // count as taken in every search for `blocked_steps` steps, so guidance goes around them when a
 // detour is cheaper than the wait.
 //
+// Refinement, the anytime part (after the repair loop of MAPF-LNS2, Li, Chen, Harabor, Stuckey,
+// Koenig, AAAI 2022, with single agents as neighbourhoods): after the update, passes over the
+// agents in the same order search again every path that still meets another, now seeing every
+// other path, until a pass finds none, the passes run out or the deadline comes. Each search is
+// a best response to the others, so collisions left by the first pass (an early agent did not
+// see the later ones) are planned around. With a step budget the passes fill the guidance's
+// share of it.
+//
 // Parallel update (fleets of thousands): with `phases` P >= 2 the map is cut into
 // bands across its longer side, each ceil(2W / (P - 1)) cells wide, and band b is updated in
 // phase b mod P. After stale paths are dropped every path starts at its agent's cell, so a
@@ -76,6 +84,11 @@ struct LocalGuidanceConfig {
   int phases = 0;                // 0: one sequential pass; P >= 2: banded parallel update (above)
   // WorldView::blocked cells count as taken for this many steps from now (-1: the window).
   int blocked_steps = -1;
+  // Refinement passes after the update (the anytime part): each searches again every path that
+  // meets another, until none does or the update's deadline comes. -1: kAnytimePasses when the
+  // update has a deadline (a step budget), none without.
+  int refine = -1;
+  static constexpr int kAnytimePasses = 3;
 };
 
 class LocalGuidance {
@@ -109,6 +122,7 @@ class LocalGuidance {
   long searches() const { return counts_.searches; }
   long cut_short() const { return counts_.cut_short; }
   long kept() const { return counts_.kept; }
+  long refined() const { return counts_.refined; }  // searches of the refinement passes
   long expansions() const { return counts_.expansions; }
   const LocalGuidanceConfig& config() const { return cfg_; }
   // Width of a band of the parallel update (0 when sequential).
@@ -127,7 +141,7 @@ class LocalGuidance {
     int32_t t, id;
   };
   struct Counts {
-    long searches = 0, expansions = 0, cut_short = 0, kept = 0;
+    long searches = 0, expansions = 0, cut_short = 0, kept = 0, refined = 0;
     void add(const Counts& o);
   };
   // What one search knows of a (cell, t) pair: whether it reached it (tag = 2 x the search's
@@ -162,6 +176,10 @@ class LocalGuidance {
   void enroll(int i, int sign);
   bool is_valid(const WorldView& world, int i) const;
   bool keeps(const WorldView& world, int i) const;
+  bool meets_another(int i) const;
+  int refine_passes(std::chrono::steady_clock::time_point deadline) const;
+  void refine(const WorldView& world, const std::vector<int>& agents, std::chrono::steady_clock::time_point deadline,
+              Search& search, std::minstd_rand& rng, Counts& counts);
   void update_in_order(const WorldView& world, const std::vector<int>& agents,
                        std::chrono::steady_clock::time_point deadline, Search& search,
                        std::minstd_rand& rng, Counts& counts);
