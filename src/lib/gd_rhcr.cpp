@@ -486,7 +486,7 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
     std::vector<int> order(agents);
     std::stable_sort(order.begin(), order.end(),
                      [&](int a, int b) { return pibt_.priority(a) > pibt_.priority(b); });
-    arena_->arena.execute([&] { guidance_->update(world, order, budget_.guidance); });  // banded: threads
+    arena_->arena.execute([&] { guidance_->update(world, order, budget_.guidance, budget_.refine); });  // banded: threads
     std::vector<Cell> preferred(world.num_agents(), kNoCell);
     for (int i : agents)
       preferred[i] = world.rotation() ? guidance_->next_move(i, world.timestep, world.positions[i])

@@ -145,7 +145,8 @@ bool LocalGuidance::is_valid(const WorldView& world, int i) const {
 bool LocalGuidance::keeps(const WorldView& world, int i) const { return cfg_.lazy && is_valid(world, i); }
 
 void LocalGuidance::update(const WorldView& world, const std::vector<int>& agents,
-                           std::chrono::steady_clock::time_point deadline) {
+                           std::chrono::steady_clock::time_point deadline,
+                           std::chrono::steady_clock::time_point refine_until) {
   const int now = world.timestep;
   for (size_t i = 0; i < path_.size(); ++i) drop_past(static_cast<int>(i), now);
   mark_blocked(world, +1);
@@ -168,11 +169,11 @@ void LocalGuidance::update(const WorldView& world, const std::vector<int>& agent
     todo = &movable;
   }
   if (parallel_) {
-    update_banded(world, *todo, deadline);
+    update_banded(world, *todo, deadline, refine_until);
   } else {
     update_in_order(world, *todo, deadline, search_, rng_, counts_);
+    refine(world, *todo, deadline, refine_until, search_, rng_, counts_);
   }
-  if (!parallel_) refine(world, *todo, deadline, search_, rng_, counts_);
   mark_blocked(world, -1);
 }
 
@@ -196,14 +197,15 @@ int LocalGuidance::refine_passes(std::chrono::steady_clock::time_point deadline)
 // another, with every other path in the table, until a pass finds none, the passes run out or
 // the deadline comes.
 void LocalGuidance::refine(const WorldView& world, const std::vector<int>& agents,
-                           std::chrono::steady_clock::time_point deadline, Search& search,
-                           std::minstd_rand& rng, Counts& counts) {
+                           std::chrono::steady_clock::time_point deadline, std::chrono::steady_clock::time_point until,
+                           Search& search, std::minstd_rand& rng, Counts& counts) {
   const int passes = refine_passes(deadline);
+  until = std::min(until, deadline);
   for (int pass = 0; pass < passes; ++pass) {
     bool any = false;
     for (int i : agents) {
       if (path_[i].empty() || !meets_another(i)) continue;
-      if (std::chrono::steady_clock::now() >= deadline) return;
+      if (std::chrono::steady_clock::now() >= until) return;
       any = true;
       ++counts.refined;
       enroll(i, -1);
@@ -258,7 +260,8 @@ void LocalGuidance::update_in_order(const WorldView& world, const std::vector<in
 // The parallel update (see the header): stale paths are dropped first, so every path left
 // starts at its agent's cell; then the bands of each phase run concurrently.
 void LocalGuidance::update_banded(const WorldView& world, const std::vector<int>& agents,
-                                  std::chrono::steady_clock::time_point deadline) {
+                                  std::chrono::steady_clock::time_point deadline,
+                                  std::chrono::steady_clock::time_point refine_until) {
   const int now = world.timestep;
   for (size_t i = 0; i < path_.size(); ++i)
     if (!path_[i].empty() && (start_[i] != now || path_[i][0] != world.positions[i])) clear(static_cast<int>(i));
@@ -288,7 +291,7 @@ void LocalGuidance::update_banded(const WorldView& world, const std::vector<int>
             std::minstd_rand rng(static_cast<std::minstd_rand::result_type>(draw % 2147483646u + 1));
             Search& search = parallel_->search.local();
             update_in_order(world, band_agents_[b], deadline, search, rng, counts[b]);
-            refine(world, band_agents_[b], deadline, search, rng, counts[b]);
+            refine(world, band_agents_[b], deadline, refine_until, search, rng, counts[b]);
           }
           GDRHCR_TSAN_RELEASE(this);
         },

@@ -20,7 +20,6 @@ LocalGuidanceConfig rollout_guidance(const MotionForecastConfig& f, LocalGuidanc
   c.recheck = kRecheck;
   c.keep = 0;
   c.phases = 0;
-  c.refine = 0;
   return c;
 }
 }  // namespace
@@ -106,7 +105,7 @@ void MotionForecast::roll(const WorldView& world, const std::vector<Cell>& next,
     order_ = agents;  // guidance in priority order, as the real update
     std::stable_sort(order_.begin(), order_.end(),
                      [&](int a, int b) { return pibt_->priority(a) > pibt_->priority(b); });
-    guide_->update(view, order_);
+    guide_->update(view, order_, deadline);
     for (int i : agents)
       preferred_[i] = world.rotation() ? guide_->next_move(i, t, pos_[i]) : guide_->next_cell(i, t, pos_[i]);
     pibt_->step(view, moves_, agents, fixed_moves_, &preferred_);

@@ -98,9 +98,11 @@ class LocalGuidance {
 
   // Brings the guidance of `agents` up to date for timestep world.timestep, in the given order
   // (earlier agents' paths are seen by later ones). Paths of other agents stay in the table.
-  // With a deadline, agents not reached by then keep no guidance this step (counted).
+  // With a deadline, agents not reached by then keep no guidance this step (counted). The
+  // refinement passes stop at the deadline or at `refine_until`, whichever comes first.
   void update(const WorldView& world, const std::vector<int>& agents,
-              std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max());
+              std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max(),
+              std::chrono::steady_clock::time_point refine_until = std::chrono::steady_clock::time_point::max());
   // Sets agent i's expected path from time world.timestep on (e.g. a plan made by another
   // solver), so guidance searches avoid it; path[0] is its cell now. With `goal`, the path is
   // taken as a guidance path planned for that goal (a lazy update may keep it); without, it is
@@ -179,12 +181,12 @@ class LocalGuidance {
   bool meets_another(int i) const;
   int refine_passes(std::chrono::steady_clock::time_point deadline) const;
   void refine(const WorldView& world, const std::vector<int>& agents, std::chrono::steady_clock::time_point deadline,
-              Search& search, std::minstd_rand& rng, Counts& counts);
+              std::chrono::steady_clock::time_point until, Search& search, std::minstd_rand& rng, Counts& counts);
   void update_in_order(const WorldView& world, const std::vector<int>& agents,
                        std::chrono::steady_clock::time_point deadline, Search& search,
                        std::minstd_rand& rng, Counts& counts);
   void update_banded(const WorldView& world, const std::vector<int>& agents,
-                     std::chrono::steady_clock::time_point deadline);
+                     std::chrono::steady_clock::time_point deadline, std::chrono::steady_clock::time_point refine_until);
   void plan(const WorldView& world, int i, Search& search, std::minstd_rand& rng, Counts& counts);
   int moves(Cell v, Heading h, bool rot, std::minstd_rand& rng, Cell* nb, Heading* nh) const;
   // What a step from -> to at abs_t, `ahead` steps after the search's start, pays for meeting others.

@@ -1,4 +1,5 @@
 // A step's wall-clock budget (GD-RHCR's step_budget): the primary solves get its first 60%, the
+// guidance's refinement passes stop at 50% (the motion forecast's rollout follows them), the
 // guidance searches stop at 85%, PIBT over rotation operations stops planning agents at 95% (the
 // others wait); what follows the guidance (the secondary solver, which moves whatever the solves
 // left, and the final check) takes 5-10 ms with 3,000 agents on Paris_1_256. No budget: every
@@ -12,6 +13,7 @@ namespace gdrhcr {
 struct StepBudget {
   using Clock = std::chrono::steady_clock;
   static constexpr double kSolveShare = 0.6;
+  static constexpr double kRefineShare = 0.5;
   static constexpr double kGuidanceShare = 0.85;
   static constexpr double kSecondaryShare = 0.95;
 
@@ -19,10 +21,12 @@ struct StepBudget {
   StepBudget(Clock::time_point start, double seconds) {
     if (seconds <= 0) return;
     solves = start + share(kSolveShare * seconds);
+    refine = start + share(kRefineShare * seconds);
     guidance = start + share(kGuidanceShare * seconds);
     secondary = start + share(kSecondaryShare * seconds);
   }
   Clock::time_point solves = Clock::time_point::max();
+  Clock::time_point refine = Clock::time_point::max();  // the guidance's refinement passes stop here
   Clock::time_point guidance = Clock::time_point::max();
   Clock::time_point secondary = Clock::time_point::max();  // PIBT over operations stops here
 
