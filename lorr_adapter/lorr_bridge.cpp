@@ -105,7 +105,8 @@ BridgeOptions bridge_options_from_env() {
 struct Bridge::Impl {
   Impl(int rows, int cols, const std::vector<int>& map, int n, const BridgeOptions& o)
       : options(o), grid(grid_of(rows, cols, map)),
-        dist(grid, ActionModel::kRotation, size_t(o.dist_budget_mb) << 20), num_agents(n) {
+        dist(grid, ActionModel::kRotation, size_t(o.dist_budget_mb) << 20, traffic_of(o, grid, n)),
+        num_agents(n) {
     Params params;
     for (auto& [k, v] : o.params) params.set(k, v);
     const double budget_s = o.budget_ms / 1000.0;
@@ -180,6 +181,13 @@ struct Bridge::Impl {
     if (!times) return;
     std::fprintf(times, "%.3f\n", std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     std::fflush(times);
+  }
+
+  // The traffic cost GDRHCR_PARAMS ask for (the world's rows are built with it).
+  static double traffic_of(const BridgeOptions& o, const Grid& grid, int n) {
+    Params params;
+    for (auto& [k, v] : o.params) params.set(k, v);
+    return traffic_cost(PlannerParams::resolve(o.planner, params, MapFacts(grid, n)), ActionModel::kRotation);
   }
 
   static constexpr double kPlannerShare = 0.9;  // of the budget, for GD-RHCR's step-budget

@@ -251,7 +251,7 @@ int run(Params& args, const Flags& flags) {
                 values.preset().c_str(), values.format().c_str());
     return 0;
   }
-  DistTable dist(grid, o.action_model, size_t(o.budget_mb) << 20);
+  DistTable dist(grid, o.action_model, size_t(o.budget_mb) << 20, traffic_cost(values, o.action_model));
   nlohmann::json task_info;
   TaskListStream* task_list = nullptr;
   std::unique_ptr<TaskStream> tasks = make_tasks(o, grid, task_info, task_list);

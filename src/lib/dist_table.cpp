@@ -2,6 +2,7 @@
 #include "tsan_annotations.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include <tbb/blocked_range.h>
@@ -16,7 +17,8 @@ constexpr size_t kEntryOverhead = sizeof(std::atomic<uint64_t>) + sizeof(std::sh
                                   sizeof(Cell) + 2 * sizeof(void*);
 }  // namespace
 
-FreeCellIndex::FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked_cells, ActionModel m)
+FreeCellIndex::FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked_cells, ActionModel m,
+                             double traffic_cost)
     : model(m) {
   const auto& free = grid.free_cells();
   num_free = static_cast<int32_t>(free.size());
@@ -36,6 +38,10 @@ FreeCellIndex::FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked_
     for (Cell c : blocked_cells)
       if (grid.is_free(c)) blocked[slot_of[c]] = 1;
   }
+  if (traffic_cost > 0) {
+    if (model != ActionModel::kRotation) throw std::invalid_argument("traffic-cost applies to the rotation model only");
+    compute_traffic_cost(traffic_cost);
+  }
   if (model == ActionModel::kRotation) {
     faced.resize(size_t(num_free) * kNumHeadings);
     for (int32_t s = 0; s < num_free; ++s)
@@ -43,6 +49,41 @@ FreeCellIndex::FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked_
         const Cell n = forward_cell(grid, free[s], h);
         faced[size_t(s) * kNumHeadings + h] = n == kNoCell ? num_free : slot_of[n];
       }
+  }
+}
+
+// Traffic cost (see the header): the flow through a slot is its subtree size in the BFS trees
+// of kTrafficRoots roots spread over the free cells (a fixed stream: the map alone decides), i.e.
+// how many shortest paths to those roots pass through it. A forward move into the slot costs
+// 1 + strength x min(1, flow / the flow at kTrafficPercentile), rounded.
+void FreeCellIndex::compute_traffic_cost(double strength) {
+  std::vector<double> flow(num_free, 0.0), sub(num_free);
+  std::vector<int32_t> parent(num_free), order;
+  order.reserve(num_free);
+  for (int r = 0; r < kTrafficRoots; ++r) {
+    const int32_t root = static_cast<int32_t>((int64_t(r) * num_free) / kTrafficRoots);
+    std::fill(parent.begin(), parent.end(), -2);
+    std::fill(sub.begin(), sub.end(), 0.0);
+    order.assign(1, root);
+    parent[root] = -1;
+    for (size_t h = 0; h < order.size(); ++h)
+      for (int32_t k = adj_begin[order[h]]; k < adj_begin[order[h] + 1]; ++k)
+        if (parent[adj[k]] == -2) parent[adj[k]] = order[h], order.push_back(adj[k]);
+    for (size_t h = order.size(); h-- > 0;) {
+      const int32_t u = order[h];
+      sub[u] += 1;
+      if (parent[u] >= 0) sub[parent[u]] += sub[u];
+      flow[u] += sub[u];
+    }
+  }
+  std::vector<double> sorted(flow);
+  const size_t at = static_cast<size_t>(kTrafficPercentile * (sorted.size() - 1));
+  std::nth_element(sorted.begin(), sorted.begin() + at, sorted.end());
+  const double top = std::max(1.0, sorted[at]);
+  cost.assign(num_free, 1);
+  for (int32_t s = 0; s < num_free; ++s) {
+    cost[s] = static_cast<uint8_t>(1 + std::lround(strength * std::min(1.0, flow[s] / top)));
+    max_cost = std::max<int32_t>(max_cost, cost[s]);
   }
 }
 
@@ -121,6 +162,9 @@ void DistRow::bfs_rotation(int32_t goal_slot) {
   queue.resize(size_t(f) * kNumHeadings);
   const int32_t* faced = ix.faced.data();
   const uint8_t* blocked = ix.blocked.empty() ? nullptr : ix.blocked.data();
+  if (!ix.cost.empty()) {
+    weighted_rotation(goal_slot, d);
+  } else {
   size_t head = 0, tail = 0;
   for (int h = 0; h < kNumHeadings; ++h) d[goal_slot * 4 + h] = 0, queue[tail++] = goal_slot * 4 + h;
   auto visit = [&](int32_t st, uint32_t nd) {
@@ -134,6 +178,7 @@ void DistRow::bfs_rotation(int32_t goal_slot) {
     const int32_t behind = faced[size_t(s) * 4 + ((h + 2) & 3)];
     if (behind < f && !(blocked && blocked[behind])) visit(behind * 4 + h, nd);
   }
+  }
   if (narrow_) d16_.assign(size_t(f) + 1, 0xFFFF);
   else d32_.assign(size_t(f) + 1, UINT32_MAX);
   excess_.assign(size_t(f) + 1, 0);
@@ -146,6 +191,37 @@ void DistRow::bfs_rotation(int32_t goal_slot) {
     uint8_t bits = 0;
     for (int h = 0; h < kNumHeadings; ++h) bits |= static_cast<uint8_t>((ds[h] - least) << (2 * h));
     excess_[s] = bits;
+  }
+}
+
+// Dial's algorithm: a forward move into slot s costs ix.cost[s], a turn 1.
+void DistRow::weighted_rotation(int32_t goal_slot, std::vector<uint32_t>& d) {
+  const FreeCellIndex& ix = *index_;
+  const int32_t f = ix.num_free;
+  const int32_t* faced = ix.faced.data();
+  const uint8_t* blocked = ix.blocked.empty() ? nullptr : ix.blocked.data();
+  const uint32_t buckets = static_cast<uint32_t>(ix.max_cost) + 1;  // Dial: distances span at most this many
+  thread_local std::vector<std::vector<int32_t>> bucket;
+  bucket.resize(buckets);
+  for (auto& b : bucket) b.clear();
+  for (int h = 0; h < kNumHeadings; ++h) d[goal_slot * 4 + h] = 0, bucket[0].push_back(goal_slot * 4 + h);
+  size_t pending = 4;
+  for (uint32_t dist = 0; pending > 0; ++dist) {
+    auto& b = bucket[dist % buckets];
+    for (size_t k = 0; k < b.size(); ++k) {
+      const int32_t st = b[k];
+      --pending;
+      if (d[st] != dist) continue;
+      const int32_t s = st >> 2, h = st & 3;
+      auto relax = [&](int32_t to, uint32_t nd) {
+        if (nd < d[to]) d[to] = nd, bucket[nd % buckets].push_back(to), ++pending;
+      };
+      relax(s * 4 + ((h + 1) & 3), dist + 1);
+      relax(s * 4 + ((h + 3) & 3), dist + 1);
+      const int32_t behind = faced[size_t(s) * 4 + ((h + 2) & 3)];
+      if (behind < f && !(blocked && blocked[behind])) relax(behind * 4 + h, dist + ix.cost[s]);
+    }
+    b.clear();
   }
 }
 
@@ -170,6 +246,12 @@ DistTable::DistTable(const Grid& grid, ActionModel model, size_t budget_bytes)
 DistTable::DistTable(const Grid& grid, const std::vector<Cell>& blocked, ActionModel model, size_t budget_bytes)
     : grid_(grid),
       index_(std::make_shared<const FreeCellIndex>(grid, blocked, model)),
+      id_(next_table_id++),
+      budget_(budget_bytes) {}
+
+DistTable::DistTable(const Grid& grid, ActionModel model, size_t budget_bytes, double traffic_cost)
+    : grid_(grid),
+      index_(std::make_shared<const FreeCellIndex>(grid, std::vector<Cell>{}, model, traffic_cost)),
       id_(next_table_id++),
       budget_(budget_bytes) {}
 

@@ -130,7 +130,10 @@ std::vector<ParamSpec> pibt_rows() {
                  "order among equally near cells: an unoccupied one first, or random"),
           choice("rotation-pibt", {"operations", "cells"}, "cells",
                  "rotation model: PIBT over 3-action operations, or over cells chosen with turns counted and "
-                 "executed turning first", "operations")};
+                 "executed turning first", "operations"),
+          real("traffic-cost", 0, 8, "0",
+               "rotation model: extra cost of a forward move into the map's busiest cells (by sampled shortest-path "
+               "flow), so distances lead around them (0 = none)")};
 }
 
 // Local guidance (PIBT following windowed paths); `product` selects GD-RHCR's product defaults.
@@ -358,6 +361,13 @@ std::string PlannerParams::format() const {
   out << "(* given; the rest from the preset '" << preset_ << "'; rules:)\n";
   for (auto& r : param_rules()) out << "  " << r.name << ": " << r.why << "\n";
   return out.str();
+}
+
+double traffic_cost(const PlannerParams& values, ActionModel model) {
+  const double k = values.has("traffic-cost") ? values.real("traffic-cost") : 0;
+  if (k > 0 && model != ActionModel::kRotation)
+    throw ParamError("parameter traffic-cost applies to the rotation model only (got " + std::to_string(k) + ")");
+  return k;
 }
 
 }  // namespace gdrhcr

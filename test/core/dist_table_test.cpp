@@ -264,3 +264,46 @@ TEST(DistTable, ConcurrentQueriesAgree) {
   for (size_t i = 0; i < g.free_cells().size(); i += 7) ref += from0[g.free_cells()[i]];  // symmetric
   EXPECT_EQ(sums[0], ref);
 }
+
+// Traffic cost (rotation): every row is a shortest-path table under the costs (a turn 1, a
+// forward move into a cell its cost), checked state by state (Bellman's equation) on random
+// maps; costs lie in [1, 1 + strength] and the busiest cells get the most.
+TEST(DistTable, TrafficCostRowsAreShortestUnderTheCosts) {
+  std::mt19937_64 rng(7);
+  for (int trial = 0; trial < 4; ++trial) {
+    const Grid g = random_map(20, 16, 0.2, rng);
+    auto ix = std::make_shared<const FreeCellIndex>(g, std::vector<Cell>{}, ActionModel::kRotation, 2.0);
+    ASSERT_EQ(static_cast<int>(ix->cost.size()), ix->num_free);
+    EXPECT_EQ(ix->max_cost, 3);
+    for (uint8_t c : ix->cost) EXPECT_TRUE(c >= 1 && c <= 3);
+    for (int k = 0; k < 5; ++k) {
+      const Cell goal = g.free_cells()[rng() % g.free_cells().size()];
+      const DistRow row(ix, goal);
+      for (Cell c : g.free_cells())
+        for (Heading h = 0; h < kNumHeadings; ++h) {
+          const int d = row.at(c, h);
+          if (c == goal) {
+            EXPECT_EQ(d, 0);
+            continue;
+          }
+          if (d >= kUnreachable) continue;
+          int best = std::min(row.at(c, (h + 1) % 4), row.at(c, (h + 3) % 4)) + 1;
+          const Cell f = forward_cell(g, c, h);
+          if (f != kNoCell && row.at(f, h) < kUnreachable) best = std::min(best, ix->cost[ix->slot_of[f]] + row.at(f, h));
+          EXPECT_EQ(d, best) << "cell " << c << " heading " << int(h);
+        }
+    }
+  }
+}
+
+TEST(DistTable, TrafficCostIsHighestOnTheOnlyDoorAndRotationOnly) {
+  // Two rooms joined by one door at (4, 2): every path between them crosses it.
+  const Grid g = Grid::from_rows({"....@....", "....@....", ".........", "....@....", "....@...."});
+  FreeCellIndex ix(g, {}, ActionModel::kRotation, 4.0);
+  const int door = ix.cost[ix.slot_of[g.cell(4, 2)]];
+  EXPECT_EQ(door, 5);
+  EXPECT_LT(ix.cost[ix.slot_of[g.cell(0, 0)]], door);
+  EXPECT_THROW(FreeCellIndex(g, {}, ActionModel::kMapf, 1.0), std::invalid_argument);
+  FreeCellIndex none(g, {}, ActionModel::kRotation, 0.0);
+  EXPECT_TRUE(none.cost.empty());
+}

@@ -27,6 +27,14 @@
 // 2 steps, so the excess is 0, 1 or 2). row[c] reads the least distance over c's headings,
 // row.at(c, h) the distance from heading h; in the mapf model both read the cell distance.
 //
+// Traffic cost (issue 24, congestion; after the traffic-flow costs of Chen et al., AAAI 2024,
+// and the guidance graphs of Zhang et al., IJCAI 2024, here derived from the map alone): in the
+// rotation model a forward move into a cell may cost more than 1, by how many shortest paths pass
+// through the cell (a sampled betweenness), so rows lead around the map's busiest cells when the
+// detour is short, and traffic that would all cross the middle of a city spreads out. Rows are
+// then computed by Dial's algorithm; a turn still costs 1, so the excess bits hold. Off (all
+// costs 1, plain BFS) unless asked for.
+//
 // Thread-safe: parallel groups query it at once. Two threads asking for the same missing row at
 // the same moment may both run its BFS (counted); one copy is kept.
 #pragma once
@@ -51,7 +59,7 @@ constexpr int kUnreachable = INT32_MAX / 4;
 // by its rows, so a row outliving its table stays readable.
 struct FreeCellIndex {
   explicit FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked = {},
-                         ActionModel model = ActionModel::kMapf);
+                         ActionModel model = ActionModel::kMapf, double traffic_cost = 0);
   ActionModel model = ActionModel::kMapf;
   int32_t num_free = 0;
   std::vector<int32_t> slot_of;       // per grid cell; num_free for obstacles
@@ -60,11 +68,17 @@ struct FreeCellIndex {
   std::vector<int32_t> adj;           //   adj[adj_begin[s] .. adj_begin[s+1])
   std::vector<uint8_t> blocked;       // per slot; empty when nothing is blocked
   std::vector<int32_t> faced;         // rotation: 4 per slot, the slot heading h faces, or num_free
+  std::vector<uint8_t> cost;          // rotation with traffic cost: per slot, a forward move into it
+  int32_t max_cost = 1;               // the largest step cost
+  static constexpr int kTrafficRoots = 64;
+  static constexpr double kTrafficPercentile = 0.99;
+  void compute_traffic_cost(double strength);
   // A shortest path over (cell, heading) states makes at most F - 1 moves, at most one turn
   // between two moves and two before the first, so its length is below 2F: rotation rows are
   // 16 bits up to half as many free cells.
   bool wide() const {
-    return model == ActionModel::kRotation ? num_free > kMaxNarrowFree / 2 : num_free > kMaxNarrowFree;
+    return model == ActionModel::kRotation ? int64_t(num_free) * (max_cost + 1) > kMaxNarrowFree
+                                           : num_free > kMaxNarrowFree;
   }
   size_t bytes() const;
   // 16-bit rows hold distances 0..65,534 and 0xFFFF as the sentinel; a component of F free
@@ -106,6 +120,7 @@ class DistRow {
  private:
   void bfs();
   void bfs_rotation(int32_t goal_slot);
+  void weighted_rotation(int32_t goal_slot, std::vector<uint32_t>& d);
   std::shared_ptr<const FreeCellIndex> index_;
   const int32_t* slot_of_;
   Cell goal_;
@@ -127,6 +142,8 @@ class DistTable {
   DistTable(const Grid& grid, ActionModel model, size_t budget_bytes = kDefaultBudgetBytes);
   DistTable(const Grid& grid, const std::vector<Cell>& blocked, ActionModel model,
             size_t budget_bytes = kDefaultBudgetBytes);
+  // Rotation rows with a traffic cost (0 = none): see the file comment.
+  DistTable(const Grid& grid, ActionModel model, size_t budget_bytes, double traffic_cost);
 
   // The row for `goal`, computing it on first use. Throws std::out_of_range for a blocked goal.
   std::shared_ptr<const DistRow> row(Cell goal) const;

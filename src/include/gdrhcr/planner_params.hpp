@@ -6,6 +6,8 @@
 // it by a test; the result JSON records the values it resolved.
 #pragma once
 
+#include "gdrhcr/action_model.hpp"
+
 #include <optional>
 #include <string>
 #include <vector>
@@ -91,6 +93,10 @@ class PlannerParams {
   std::string planner_, preset_;
   std::vector<ParamValue> values_;
 };
+
+// The distance table's traffic cost the parameters ask for (0 when the planner has none). Throws
+// ParamError when one is asked for outside the rotation model.
+double traffic_cost(const PlannerParams& values, ActionModel model);
 
 // Every parameter of `planner`, in table order. Throws ParamError for an unknown planner.
 const std::vector<ParamSpec>& planner_param_specs(const std::string& planner);
