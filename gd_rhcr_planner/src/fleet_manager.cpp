@@ -77,7 +77,6 @@ FleetManager::FleetManager(const gdrhcr::Grid& grid, FleetConfig cfg, Log sink)
   cfg_.validate();
   if (static_cast<size_t>(cfg_.num_robots) > grid_.free_cells().size())
     throw gdrhcr::ParamError("~num_robots exceeds the free cells of the map");
-  dist_ = std::make_unique<gdrhcr::DistTable>(grid_, cfg_.model(), size_t(cfg_.dist_budget_mb) << 20);
   // GD-RHCR returns within 90% of the plan deadline (groups it cannot solve in time go to its
   // secondary solver), so the fallback PIBT moves the whole fleet only when even that is late.
   auto_step_budget_ = gdrhcr::planner_has_param(cfg_.planner, "step-budget") && !cfg_.planner_params.has("step-budget");
@@ -91,6 +90,8 @@ FleetManager::FleetManager(const gdrhcr::Grid& grid, FleetConfig cfg, Log sink)
   gdrhcr::Params given = cfg_.planner_params;
   const auto values = gdrhcr::PlannerParams::resolve(cfg_.planner, given, gdrhcr::MapFacts(grid_, cfg_.num_robots));
   given.check_all_used("planner " + cfg_.planner);  // a parameter the planner lacks is an error naming it
+  dist_ = std::make_unique<gdrhcr::DistTable>(grid_, cfg_.model(), size_t(cfg_.dist_budget_mb) << 20,
+                                              gdrhcr::traffic_cost(values, cfg_.model()));
   if (values.has("V")) live_.V = values.integer("V");
   if (values.has("H")) live_.H = values.integer("H");
   if (values.has("c-soft")) live_.c_soft = values.real("c-soft");
