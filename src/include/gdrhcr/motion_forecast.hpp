@@ -49,7 +49,8 @@ class MotionForecast {
   // Rolls `agents` forward from `next` (their cells at world.timestep + 1) with a copy of `pibt`,
   // starting from the paths of `guidance`. `fixed` (optional) gives, per agent outside `agents`,
   // its cells from world.timestep + 1 on (empty: it stays at its next cell). Past `deadline` the
-  // rollout stops: the forecast is shorter.
+  // rollout stops: the forecast is shorter. The rollout's guidance refines as the real one does
+  // (lg-refine; by default only with a deadline), until `deadline`.
   void roll(const WorldView& world, const std::vector<Cell>& next, const std::vector<int>& agents,
             const PibtStep& pibt, const LocalGuidance& guidance,
             const std::vector<std::vector<Cell>>* fixed = nullptr,
