@@ -107,8 +107,7 @@ struct Bridge::Impl {
       : options(o), grid(grid_of(rows, cols, map)),
         dist(grid, ActionModel::kRotation, size_t(o.dist_budget_mb) << 20, traffic_of(o, grid, n)),
         num_agents(n) {
-    Params params;
-    for (auto& [k, v] : o.params) params.set(k, v);
+    Params params = given_params(o);
     const double budget_s = o.budget_ms / 1000.0;
     if (budget_s > 0 && o.planner == "gd-rhcr" && !params.has("step-budget"))
       params.set("step-budget", std::to_string(kPlannerShare * budget_s));
@@ -183,10 +182,14 @@ struct Bridge::Impl {
     std::fflush(times);
   }
 
-  // The traffic cost GDRHCR_PARAMS ask for (the world's rows are built with it).
-  static double traffic_of(const BridgeOptions& o, const Grid& grid, int n) {
+  static Params given_params(const BridgeOptions& o) {
     Params params;
     for (auto& [k, v] : o.params) params.set(k, v);
+    return params;
+  }
+  // The traffic cost GDRHCR_PARAMS ask for (the world's rows are built with it).
+  static double traffic_of(const BridgeOptions& o, const Grid& grid, int n) {
+    Params params = given_params(o);
     return traffic_cost(PlannerParams::resolve(o.planner, params, MapFacts(grid, n)), ActionModel::kRotation);
   }
 

@@ -154,31 +154,11 @@ void DistRow::bfs() {
 // move away. Blocked slots are never entered. Then per slot: the least distance and the excess
 // of each heading over it.
 void DistRow::bfs_rotation(int32_t goal_slot) {
-  const FreeCellIndex& ix = *index_;
-  const int32_t f = ix.num_free;
+  const int32_t f = index_->num_free;
   thread_local std::vector<uint32_t> d;
-  thread_local std::vector<int32_t> queue;
   d.assign(size_t(f) * kNumHeadings, UINT32_MAX);
-  queue.resize(size_t(f) * kNumHeadings);
-  const int32_t* faced = ix.faced.data();
-  const uint8_t* blocked = ix.blocked.empty() ? nullptr : ix.blocked.data();
-  if (!ix.cost.empty()) {
-    weighted_rotation(goal_slot, d);
-  } else {
-  size_t head = 0, tail = 0;
-  for (int h = 0; h < kNumHeadings; ++h) d[goal_slot * 4 + h] = 0, queue[tail++] = goal_slot * 4 + h;
-  auto visit = [&](int32_t st, uint32_t nd) {
-    if (d[st] == UINT32_MAX) d[st] = nd, queue[tail++] = st;
-  };
-  while (head < tail) {
-    const int32_t st = queue[head++], s = st >> 2, h = st & 3;
-    const uint32_t nd = d[st] + 1;
-    visit(s * 4 + ((h + 1) & 3), nd);
-    visit(s * 4 + ((h + 3) & 3), nd);
-    const int32_t behind = faced[size_t(s) * 4 + ((h + 2) & 3)];
-    if (behind < f && !(blocked && blocked[behind])) visit(behind * 4 + h, nd);
-  }
-  }
+  if (index_->cost.empty()) unit_rotation(goal_slot, d);
+  else weighted_rotation(goal_slot, d);
   if (narrow_) d16_.assign(size_t(f) + 1, 0xFFFF);
   else d32_.assign(size_t(f) + 1, UINT32_MAX);
   excess_.assign(size_t(f) + 1, 0);
@@ -194,7 +174,30 @@ void DistRow::bfs_rotation(int32_t goal_slot) {
   }
 }
 
-// Dial's algorithm: a forward move into slot s costs ix.cost[s], a turn 1.
+// The reverse BFS: every action costs 1.
+void DistRow::unit_rotation(int32_t goal_slot, std::vector<uint32_t>& d) {
+  const FreeCellIndex& ix = *index_;
+  const int32_t f = ix.num_free;
+  thread_local std::vector<int32_t> queue;
+  queue.resize(size_t(f) * kNumHeadings);
+  const int32_t* faced = ix.faced.data();
+  const uint8_t* blocked = ix.blocked.empty() ? nullptr : ix.blocked.data();
+  size_t head = 0, tail = 0;
+  for (int h = 0; h < kNumHeadings; ++h) d[goal_slot * 4 + h] = 0, queue[tail++] = goal_slot * 4 + h;
+  auto visit = [&](int32_t st, uint32_t nd) {
+    if (d[st] == UINT32_MAX) d[st] = nd, queue[tail++] = st;
+  };
+  while (head < tail) {
+    const int32_t st = queue[head++], s = st >> 2, h = st & 3;
+    const uint32_t nd = d[st] + 1;
+    visit(s * 4 + ((h + 1) & 3), nd);
+    visit(s * 4 + ((h + 3) & 3), nd);
+    const int32_t behind = faced[size_t(s) * 4 + ((h + 2) & 3)];
+    if (behind < f && !(blocked && blocked[behind])) visit(behind * 4 + h, nd);
+  }
+}
+
+// With a traffic cost, Dial's algorithm: a forward move into slot s costs ix.cost[s], a turn 1.
 void DistRow::weighted_rotation(int32_t goal_slot, std::vector<uint32_t>& d) {
   const FreeCellIndex& ix = *index_;
   const int32_t f = ix.num_free;

@@ -131,14 +131,8 @@ bool LocalGuidance::is_valid(const WorldView& world, int i) const {
   // Keep at least `keep` steps ahead (default half the window), unless the path ends on the goal.
   const int keep = cfg_.keep >= 0 ? cfg_.keep : cfg_.window / 2;
   if (static_cast<int>(p.size()) <= keep + 1 && p.back() != goal) return false;
-  // Replan a path that now meets another one (its own entries count once at each vertex).
-  const int horizon = std::min<int>(p.size(), cfg_.recheck + 1);
-  for (int k = 1; k < horizon; ++k) {
-    if (at(p[k], slot(start_[i] + k)) > 1) return false;
-    if (p[k] != p[k - 1] && leaving(p[k], slot(start_[i] + k - 1), dir(p[k], p[k - 1])) > 0)
-      return false;
-  }
-  return true;
+  // Replan a path that now meets another one.
+  return !meets_another(i, cfg_.recheck + 1);
 }
 
 // Whether agent i keeps its path this step (lazy: until it is left or meets another path).
@@ -177,13 +171,14 @@ void LocalGuidance::update(const WorldView& world, const std::vector<int>& agent
   mark_blocked(world, -1);
 }
 
-// Whether agent i's path meets another path (vertex or swap) anywhere in the window.
-bool LocalGuidance::meets_another(int i) const {
+// Whether agent i's path meets another path (vertex or swap) within its first `horizon` entries
+// (its own entries count once at each vertex).
+bool LocalGuidance::meets_another(int i, int horizon) const {
   const auto& p = path_[i];
-  for (size_t k = 1; k < p.size(); ++k) {
-    if (at(p[k], slot(start_[i] + static_cast<int>(k))) > 1) return true;
-    if (p[k] != p[k - 1] && leaving(p[k], slot(start_[i] + static_cast<int>(k) - 1), dir(p[k], p[k - 1])) > 0)
-      return true;
+  const int end = std::min<int>(p.size(), horizon);
+  for (int k = 1; k < end; ++k) {
+    if (at(p[k], slot(start_[i] + k)) > 1) return true;
+    if (p[k] != p[k - 1] && leaving(p[k], slot(start_[i] + k - 1), dir(p[k], p[k - 1])) > 0) return true;
   }
   return false;
 }
@@ -204,7 +199,7 @@ void LocalGuidance::refine(const WorldView& world, const std::vector<int>& agent
   for (int pass = 0; pass < passes; ++pass) {
     bool any = false;
     for (int i : agents) {
-      if (path_[i].empty() || !meets_another(i)) continue;
+      if (path_[i].empty() || !meets_another(i, slots_)) continue;
       if (std::chrono::steady_clock::now() >= until) return;
       any = true;
       ++counts.refined;

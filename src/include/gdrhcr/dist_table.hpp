@@ -120,6 +120,8 @@ class DistRow {
  private:
   void bfs();
   void bfs_rotation(int32_t goal_slot);
+  // Distances to the goal per state (slot * 4 + heading) into d (all UINT32_MAX beforehand).
+  void unit_rotation(int32_t goal_slot, std::vector<uint32_t>& d);
   void weighted_rotation(int32_t goal_slot, std::vector<uint32_t>& d);
   std::shared_ptr<const FreeCellIndex> index_;
   const int32_t* slot_of_;

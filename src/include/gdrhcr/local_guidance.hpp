@@ -178,7 +178,7 @@ class LocalGuidance {
   void enroll(int i, int sign);
   bool is_valid(const WorldView& world, int i) const;
   bool keeps(const WorldView& world, int i) const;
-  bool meets_another(int i) const;
+  bool meets_another(int i, int horizon) const;
   int refine_passes(std::chrono::steady_clock::time_point deadline) const;
   void refine(const WorldView& world, const std::vector<int>& agents, std::chrono::steady_clock::time_point deadline,
               std::chrono::steady_clock::time_point until, Search& search, std::minstd_rand& rng, Counts& counts);
