@@ -105,14 +105,14 @@ BridgeOptions bridge_options_from_env() {
 struct Bridge::Impl {
   Impl(int rows, int cols, const std::vector<int>& map, int n, const BridgeOptions& o)
       : options(o), grid(grid_of(rows, cols, map)),
-        dist(grid, ActionModel::kRotation, size_t(o.dist_budget_mb) << 20, traffic_of(o, grid, n)),
+        dist(grid, ActionModel::kRotation, size_t(o.dist_budget_mb) << 20, step_costs_of(o, grid, n)),
         num_agents(n) {
     Params params = given_params(o);
     const double budget_s = o.budget_ms / 1000.0;
     if (budget_s > 0 && o.planner == "gd-rhcr" && !params.has("step-budget"))
       params.set("step-budget", std::to_string(kPlannerShare * budget_s));
     if (budget_s > 0 && o.planner == "rhcr" && !params.has("timeout")) params.set("timeout", std::to_string(budget_s));
-    const PlannerParams values = PlannerParams::resolve(o.planner, params, MapFacts(grid, n));
+    const PlannerParams values = PlannerParams::resolve(o.planner, params, MapFacts(grid, n, ActionModel::kRotation));
     params.check_all_used("GDRHCR_PARAMS for planner " + o.planner);
     const TurnPlanning turns = o.turns.empty() ? kLorrTurnPlanning : parse_turn_planning(o.turns);
     if (turns == TurnPlanning::kMapfWait) {
@@ -187,10 +187,11 @@ struct Bridge::Impl {
     for (auto& [k, v] : o.params) params.set(k, v);
     return params;
   }
-  // The traffic cost GDRHCR_PARAMS ask for (the world's rows are built with it).
-  static double traffic_of(const BridgeOptions& o, const Grid& grid, int n) {
+  // The step costs GDRHCR_PARAMS ask for (the world's rows are built with them).
+  static StepCosts step_costs_of(const BridgeOptions& o, const Grid& grid, int n) {
     Params params = given_params(o);
-    return traffic_cost(PlannerParams::resolve(o.planner, params, MapFacts(grid, n)), ActionModel::kRotation);
+    return step_costs(PlannerParams::resolve(o.planner, params, MapFacts(grid, n, ActionModel::kRotation)),
+                      ActionModel::kRotation);
   }
 
   static constexpr double kPlannerShare = 0.9;  // of the budget, for GD-RHCR's step-budget

@@ -496,7 +496,8 @@ const gdrhcr::DistTable& Executor::dist_for(const std::vector<Cell>& obstacles) 
     obstacle_dist_.reset();
     if (!obstacles.empty())
       obstacle_dist_ =
-          std::make_shared<const gdrhcr::DistTable>(grid_, obstacles, cfg_.action_model, cfg_.dist_budget_bytes);
+          std::make_shared<const gdrhcr::DistTable>(grid_, obstacles, cfg_.action_model, cfg_.dist_budget_bytes,
+                                                    dist_.step_costs());
   }
   return obstacle_dist_ ? *obstacle_dist_ : dist_;
 }

@@ -88,10 +88,10 @@ FleetManager::FleetManager(const gdrhcr::Grid& grid, FleetConfig cfg, Log sink)
   live_.dispatch_switch_margin = cfg_.dispatch.switch_margin;
   live_.dispatch_finish_horizon = cfg_.dispatch.finish_horizon;
   gdrhcr::Params given = cfg_.planner_params;
-  const auto values = gdrhcr::PlannerParams::resolve(cfg_.planner, given, gdrhcr::MapFacts(grid_, cfg_.num_robots));
+  const auto values = gdrhcr::PlannerParams::resolve(cfg_.planner, given, gdrhcr::MapFacts(grid_, cfg_.num_robots, cfg_.model()));
   given.check_all_used("planner " + cfg_.planner);  // a parameter the planner lacks is an error naming it
   dist_ = std::make_unique<gdrhcr::DistTable>(grid_, cfg_.model(), size_t(cfg_.dist_budget_mb) << 20,
-                                              gdrhcr::traffic_cost(values, cfg_.model()));
+                                              gdrhcr::step_costs(values, cfg_.model()));
   if (values.has("V")) live_.V = values.integer("V");
   if (values.has("H")) live_.H = values.integer("H");
   if (values.has("c-soft")) live_.c_soft = values.real("c-soft");

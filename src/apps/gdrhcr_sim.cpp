@@ -244,14 +244,14 @@ void write_text(const std::string& path, const std::string& text) {
 int run(Params& args, const Flags& flags) {
   const RunOptions o = read_options(args);
   const Grid grid = o.lorr ? std::move(o.lorr->grid) : Grid::load(o.map_path);
-  const PlannerParams values = PlannerParams::resolve(o.planner, args, MapFacts(grid, o.agents));
+  const PlannerParams values = PlannerParams::resolve(o.planner, args, MapFacts(grid, o.agents, o.action_model));
   args.check_all_used("gdrhcr_sim --planner " + o.planner);
   if (flags.list_params) {
     std::printf("%s parameters for %s, %d agents (preset %s):\n%s", o.planner.c_str(), o.map_path.c_str(), o.agents,
                 values.preset().c_str(), values.format().c_str());
     return 0;
   }
-  DistTable dist(grid, o.action_model, size_t(o.budget_mb) << 20, traffic_cost(values, o.action_model));
+  DistTable dist(grid, o.action_model, size_t(o.budget_mb) << 20, step_costs(values, o.action_model));
   nlohmann::json task_info;
   TaskListStream* task_list = nullptr;
   std::unique_ptr<TaskStream> tasks = make_tasks(o, grid, task_info, task_list);

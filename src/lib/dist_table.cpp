@@ -1,4 +1,5 @@
 #include "gdrhcr/dist_table.hpp"
+#include "gdrhcr/lanes.hpp"
 #include "tsan_annotations.hpp"
 
 #include <algorithm>
@@ -18,7 +19,7 @@ constexpr size_t kEntryOverhead = sizeof(std::atomic<uint64_t>) + sizeof(std::sh
 }  // namespace
 
 FreeCellIndex::FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked_cells, ActionModel m,
-                             double traffic_cost)
+                             StepCosts costs)
     : model(m) {
   const auto& free = grid.free_cells();
   num_free = static_cast<int32_t>(free.size());
@@ -38,9 +39,13 @@ FreeCellIndex::FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked_
     for (Cell c : blocked_cells)
       if (grid.is_free(c)) blocked[slot_of[c]] = 1;
   }
-  if (traffic_cost > 0) {
-    if (model != ActionModel::kRotation) throw std::invalid_argument("traffic-cost applies to the rotation model only");
-    compute_traffic_cost(traffic_cost);
+  if (costs.any()) {
+    if (model != ActionModel::kRotation)
+      throw std::invalid_argument("traffic-cost and lane-cost apply to the rotation model only");
+    cost.assign(size_t(num_free) * kNumHeadings, 1);
+    if (costs.traffic > 0) add_traffic_cost(costs.traffic);
+    if (costs.lane > 0) add_lane_cost(grid, costs.lane);
+    if (max_cost == 1) cost.clear();  // e.g. lanes on a map without aisles: plain BFS rows
   }
   if (model == ActionModel::kRotation) {
     faced.resize(size_t(num_free) * kNumHeadings);
@@ -55,8 +60,8 @@ FreeCellIndex::FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked_
 // Traffic cost (see the header): the flow through a slot is its subtree size in the BFS trees
 // of kTrafficRoots roots spread over the free cells (a fixed stream: the map alone decides), i.e.
 // how many shortest paths to those roots pass through it. A forward move into the slot costs
-// 1 + strength x min(1, flow / the flow at kTrafficPercentile), rounded.
-void FreeCellIndex::compute_traffic_cost(double strength) {
+// 1 + strength x min(1, flow / the flow at kTrafficPercentile), rounded (from any heading).
+void FreeCellIndex::add_traffic_cost(double strength) {
   std::vector<double> flow(num_free, 0.0), sub(num_free);
   std::vector<int32_t> parent(num_free), order;
   order.reserve(num_free);
@@ -80,17 +85,29 @@ void FreeCellIndex::compute_traffic_cost(double strength) {
   const size_t at = static_cast<size_t>(kTrafficPercentile * (sorted.size() - 1));
   std::nth_element(sorted.begin(), sorted.begin() + at, sorted.end());
   const double top = std::max(1.0, sorted[at]);
-  cost.assign(num_free, 1);
-  for (int32_t s = 0; s < num_free; ++s) {
-    cost[s] = static_cast<uint8_t>(1 + std::lround(strength * std::min(1.0, flow[s] / top)));
-    max_cost = std::max<int32_t>(max_cost, cost[s]);
-  }
+  for (int32_t s = 0; s < num_free; ++s)
+    for (int h = 0; h < kNumHeadings; ++h) raise_cost(s, h, std::lround(strength * std::min(1.0, flow[s] / top)));
+}
+
+// Lane cost (see the header): a forward move against the lane of the cell it enters costs
+// `extra` more, rounded.
+void FreeCellIndex::add_lane_cost(const Grid& grid, double extra) {
+  const Lanes lanes = derive_lanes(grid);
+  for (int32_t s = 0; s < num_free; ++s)
+    for (Heading h = 0; h < kNumHeadings; ++h)
+      if (lanes.against(grid, cell_of[s], h)) raise_cost(s, h, std::lround(extra));
+}
+
+void FreeCellIndex::raise_cost(int32_t slot, int heading, long extra) {
+  uint8_t& c = cost[size_t(slot) * kNumHeadings + heading];
+  c = static_cast<uint8_t>(std::min<long>(c + extra, UINT8_MAX));
+  max_cost = std::max<int32_t>(max_cost, c);
 }
 
 size_t FreeCellIndex::bytes() const {
   return sizeof(*this) + slot_of.capacity() * sizeof(int32_t) + cell_of.capacity() * sizeof(Cell) +
          adj_begin.capacity() * sizeof(int32_t) + adj.capacity() * sizeof(int32_t) + blocked.capacity() +
-         faced.capacity() * sizeof(int32_t);
+         faced.capacity() * sizeof(int32_t) + cost.capacity();
 }
 
 namespace {
@@ -197,7 +214,8 @@ void DistRow::unit_rotation(int32_t goal_slot, std::vector<uint32_t>& d) {
   }
 }
 
-// With a traffic cost, Dial's algorithm: a forward move into slot s costs ix.cost[s], a turn 1.
+// With step costs, Dial's algorithm: a forward move into slot s in heading h costs
+// ix.cost[4 s + h], a turn 1.
 void DistRow::weighted_rotation(int32_t goal_slot, std::vector<uint32_t>& d) {
   const FreeCellIndex& ix = *index_;
   const int32_t f = ix.num_free;
@@ -222,7 +240,7 @@ void DistRow::weighted_rotation(int32_t goal_slot, std::vector<uint32_t>& d) {
       relax(s * 4 + ((h + 1) & 3), dist + 1);
       relax(s * 4 + ((h + 3) & 3), dist + 1);
       const int32_t behind = faced[size_t(s) * 4 + ((h + 2) & 3)];
-      if (behind < f && !(blocked && blocked[behind])) relax(behind * 4 + h, dist + ix.cost[s]);
+      if (behind < f && !(blocked && blocked[behind])) relax(behind * 4 + h, dist + ix.cost[size_t(s) * 4 + h]);
     }
     b.clear();
   }
@@ -247,14 +265,16 @@ DistTable::DistTable(const Grid& grid, ActionModel model, size_t budget_bytes)
     : DistTable(grid, std::vector<Cell>{}, model, budget_bytes) {}
 
 DistTable::DistTable(const Grid& grid, const std::vector<Cell>& blocked, ActionModel model, size_t budget_bytes)
-    : grid_(grid),
-      index_(std::make_shared<const FreeCellIndex>(grid, blocked, model)),
-      id_(next_table_id++),
-      budget_(budget_bytes) {}
+    : DistTable(grid, blocked, model, budget_bytes, StepCosts{}) {}
 
-DistTable::DistTable(const Grid& grid, ActionModel model, size_t budget_bytes, double traffic_cost)
+DistTable::DistTable(const Grid& grid, ActionModel model, size_t budget_bytes, StepCosts costs)
+    : DistTable(grid, std::vector<Cell>{}, model, budget_bytes, costs) {}
+
+DistTable::DistTable(const Grid& grid, const std::vector<Cell>& blocked, ActionModel model, size_t budget_bytes,
+                     StepCosts costs)
     : grid_(grid),
-      index_(std::make_shared<const FreeCellIndex>(grid, std::vector<Cell>{}, model, traffic_cost)),
+      index_(std::make_shared<const FreeCellIndex>(grid, blocked, model, costs)),
+      costs_(costs),
       id_(next_table_id++),
       budget_(budget_bytes) {}
 

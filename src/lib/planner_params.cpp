@@ -55,6 +55,11 @@ std::string rule_crowded(const std::string& param, const MapFacts& f, const Plan
 std::string rule_window(const std::string&, const MapFacts& f, const PlannerParams&) {
   return thousands(f) || many_cut_cells(f) ? "20" : "30";
 }
+// One-way lanes (lanes.hpp) where turning round in a one-cell aisle costs two turns: the
+// rotation model. In the mapf model a robot backs out of an aisle in one step.
+std::string rule_lanes(const std::string&, const MapFacts& f, const PlannerParams&) {
+  return f.model() == ActionModel::kRotation ? "2" : "0";
+}
 std::string rule_far_cost(const std::string&, const MapFacts&, const PlannerParams& earlier) {
   const bool forecast = earlier.text("guidance") == "local" && earlier.integer("lg-forecast") >= 2;
   return forecast ? "2" : "-1";
@@ -85,6 +90,10 @@ const std::vector<ParamRule>& param_rules() {
        "30 steps on maps without many cut cells (head-on meetings in long aisles show up late), up to 2,000 agents; "
        "else 20",
        std::string(kRulesFigure) + "guidance-window", rule_window},
+      {"lanes",
+       "rotation model: a forward move against a one-way lane derived from the map's one-cell aisles costs 2 more "
+       "(lane-cost 2; lanes.hpp); mapf model: none",
+       std::string(kRulesFigure) + "lanes", rule_lanes},
       {"far-cost", "where the motion forecast runs, conflicts lg-near-steps or more ahead cost 2; else as lg-cost (-1)",
        std::string(kRulesFigure) + "far-cost", rule_far_cost},
   };
@@ -133,7 +142,10 @@ std::vector<ParamSpec> pibt_rows() {
                  "executed turning first", "operations"),
           real("traffic-cost", 0, 8, "0",
                "rotation model: extra cost of a forward move into the map's busiest cells (by sampled shortest-path "
-               "flow), so distances lead around them (0 = none)")};
+               "flow), so distances lead around them (0 = none)"),
+          real("lane-cost", 0, 8, "0",
+               "rotation model: extra cost of a forward move against a one-way lane derived from the map's one-cell "
+               "aisles (0 = none)")};
 }
 
 // Local guidance (PIBT following windowed paths); `product` selects GD-RHCR's product defaults.
@@ -204,6 +216,7 @@ std::vector<ParamSpec> gd_rhcr_table() {
   for (auto& r : guidance_rows(true, "local")) t.push_back(r);
   for (auto& r : t) {
     if (r.name == "lg-contraflow") r.value = "0.1", r.paper = "0";
+    if (r.name == "lane-cost") r.rule = "lanes", r.paper = "0";
     if (r.name == "guidance") r.rule = "crowded-fleet";
   }
   return t;
@@ -363,11 +376,15 @@ std::string PlannerParams::format() const {
   return out.str();
 }
 
-double traffic_cost(const PlannerParams& values, ActionModel model) {
-  const double k = values.has("traffic-cost") ? values.real("traffic-cost") : 0;
-  if (k > 0 && model != ActionModel::kRotation)
-    throw ParamError("parameter traffic-cost applies to the rotation model only (got " + std::to_string(k) + ")");
-  return k;
+StepCosts step_costs(const PlannerParams& values, ActionModel model) {
+  StepCosts c;
+  for (auto [name, value] : {std::pair{"traffic-cost", &c.traffic}, std::pair{"lane-cost", &c.lane}}) {
+    *value = values.has(name) ? values.real(name) : 0;
+    if (*value > 0 && model != ActionModel::kRotation)
+      throw ParamError(std::string("parameter ") + name + " applies to the rotation model only (got " +
+                       fmt_number(*value) + ")");
+  }
+  return c;
 }
 
 }  // namespace gdrhcr

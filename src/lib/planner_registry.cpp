@@ -140,7 +140,7 @@ std::unique_ptr<Planner> make_planner(const PlannerParams& values, const Grid& g
 
 std::unique_ptr<Planner> make_planner(const std::string& name, Params& params, const Grid& grid,
                                       int num_agents, uint64_t seed, ActionModel model) {
-  const PlannerParams values = PlannerParams::resolve(name, params, MapFacts(grid, num_agents));
+  const PlannerParams values = PlannerParams::resolve(name, params, MapFacts(grid, num_agents, model));
   params.check_all_used("planner " + name);
   return make_planner(values, grid, num_agents, seed, model);
 }

@@ -265,45 +265,80 @@ TEST(DistTable, ConcurrentQueriesAgree) {
   EXPECT_EQ(sums[0], ref);
 }
 
-// Traffic cost (rotation): every row is a shortest-path table under the costs (a turn 1, a
-// forward move into a cell its cost), checked state by state (Bellman's equation) on random
-// maps; costs lie in [1, 1 + strength] and the busiest cells get the most.
+// Every row is a shortest-path table under the step costs (a turn 1, a forward move in heading h
+// into a cell its cost), checked state by state (Bellman's equation) for goals picked by rng.
+static void expect_rows_shortest_under_costs(const Grid& g, const std::shared_ptr<const FreeCellIndex>& ix,
+                                      std::mt19937_64& rng) {
+  for (int k = 0; k < 5; ++k) {
+    const Cell goal = g.free_cells()[rng() % g.free_cells().size()];
+    const DistRow row(ix, goal);
+    for (Cell c : g.free_cells())
+      for (Heading h = 0; h < kNumHeadings; ++h) {
+        const int d = row.at(c, h);
+        if (c == goal) {
+          EXPECT_EQ(d, 0);
+          continue;
+        }
+        if (d >= kUnreachable) continue;
+        int best = std::min(row.at(c, (h + 1) % 4), row.at(c, (h + 3) % 4)) + 1;
+        const Cell f = forward_cell(g, c, h);
+        if (f != kNoCell && row.at(f, h) < kUnreachable)
+          best = std::min(best, ix->cost[ix->slot_of[f] * kNumHeadings + h] + row.at(f, h));
+        EXPECT_EQ(d, best) << "cell " << c << " heading " << int(h);
+      }
+  }
+}
+
+// Traffic cost (rotation): rows are shortest under the costs on random maps; costs lie in
+// [1, 1 + strength], the same from every heading.
 TEST(DistTable, TrafficCostRowsAreShortestUnderTheCosts) {
   std::mt19937_64 rng(7);
   for (int trial = 0; trial < 4; ++trial) {
     const Grid g = random_map(20, 16, 0.2, rng);
-    auto ix = std::make_shared<const FreeCellIndex>(g, std::vector<Cell>{}, ActionModel::kRotation, 2.0);
-    ASSERT_EQ(static_cast<int>(ix->cost.size()), ix->num_free);
+    auto ix = std::make_shared<const FreeCellIndex>(g, std::vector<Cell>{}, ActionModel::kRotation,
+                                                    StepCosts{2.0, 0.0});
+    ASSERT_EQ(static_cast<int>(ix->cost.size()), ix->num_free * kNumHeadings);
     EXPECT_EQ(ix->max_cost, 3);
     for (uint8_t c : ix->cost) EXPECT_TRUE(c >= 1 && c <= 3);
-    for (int k = 0; k < 5; ++k) {
-      const Cell goal = g.free_cells()[rng() % g.free_cells().size()];
-      const DistRow row(ix, goal);
-      for (Cell c : g.free_cells())
-        for (Heading h = 0; h < kNumHeadings; ++h) {
-          const int d = row.at(c, h);
-          if (c == goal) {
-            EXPECT_EQ(d, 0);
-            continue;
-          }
-          if (d >= kUnreachable) continue;
-          int best = std::min(row.at(c, (h + 1) % 4), row.at(c, (h + 3) % 4)) + 1;
-          const Cell f = forward_cell(g, c, h);
-          if (f != kNoCell && row.at(f, h) < kUnreachable) best = std::min(best, ix->cost[ix->slot_of[f]] + row.at(f, h));
-          EXPECT_EQ(d, best) << "cell " << c << " heading " << int(h);
-        }
-    }
+    expect_rows_shortest_under_costs(g, ix, rng);
   }
 }
 
 TEST(DistTable, TrafficCostIsHighestOnTheOnlyDoorAndRotationOnly) {
   // Two rooms joined by one door at (4, 2): every path between them crosses it.
   const Grid g = Grid::from_rows({"....@....", "....@....", ".........", "....@....", "....@...."});
-  FreeCellIndex ix(g, {}, ActionModel::kRotation, 4.0);
-  const int door = ix.cost[ix.slot_of[g.cell(4, 2)]];
+  FreeCellIndex ix(g, {}, ActionModel::kRotation, StepCosts{4.0, 0.0});
+  const auto into = [&](Cell c) { return int(ix.cost[ix.slot_of[c] * kNumHeadings + kEast]); };
+  const int door = into(g.cell(4, 2));
   EXPECT_EQ(door, 5);
-  EXPECT_LT(ix.cost[ix.slot_of[g.cell(0, 0)]], door);
-  EXPECT_THROW(FreeCellIndex(g, {}, ActionModel::kMapf, 1.0), std::invalid_argument);
-  FreeCellIndex none(g, {}, ActionModel::kRotation, 0.0);
+  EXPECT_LT(into(g.cell(0, 0)), door);
+  for (Heading h = 0; h < kNumHeadings; ++h) EXPECT_EQ(ix.cost[ix.slot_of[g.cell(4, 2)] * kNumHeadings + h], door);
+  EXPECT_THROW(FreeCellIndex(g, {}, ActionModel::kMapf, StepCosts{1.0, 0.0}), std::invalid_argument);
+  EXPECT_THROW(FreeCellIndex(g, {}, ActionModel::kMapf, StepCosts{0.0, 2.0}), std::invalid_argument);
+  FreeCellIndex none(g, {}, ActionModel::kRotation, StepCosts{});
   EXPECT_TRUE(none.cost.empty());
+  FreeCellIndex no_lanes(g, {}, ActionModel::kRotation, StepCosts{0.0, 2.0});  // no one-cell aisle
+  EXPECT_TRUE(no_lanes.cost.empty());
+}
+
+// Lane cost (rotation): on shelves with one-cell aisles (lanes east, west, east, west), a move
+// against an aisle's lane costs 1 + 2, so going east along the westbound aisle takes the
+// eastbound one next to it (18 steps with the turns) instead of 11 moves at 3 each; rows stay
+// shortest under the costs with the traffic cost added too.
+TEST(DistTable, LaneCostSendsTrafficAlongTheNextAisleTheOtherWay) {
+  const Grid g = Grid::from_rows({"............", ".@@@@@@@@@@.", "............", ".@@@@@@@@@@.",
+                                  "............", ".@@@@@@@@@@.", "............"});
+  auto lanes = std::make_shared<const FreeCellIndex>(g, std::vector<Cell>{}, ActionModel::kRotation,
+                                                     StepCosts{0.0, 2.0});
+  auto plain = std::make_shared<const FreeCellIndex>(g, std::vector<Cell>{}, ActionModel::kRotation);
+  const Cell west = g.cell(0, 2), east = g.cell(11, 2);  // the ends of the westbound aisle
+  EXPECT_EQ(DistRow(lanes, west).at(east, kWest), 11);  // with the lane
+  EXPECT_EQ(DistRow(lanes, east).at(west, kEast), 18);  // north, along the eastbound aisle, south
+  EXPECT_EQ(DistRow(plain, east).at(west, kEast), 11);
+  EXPECT_EQ(lanes->max_cost, 3);
+  std::mt19937_64 rng(3);
+  expect_rows_shortest_under_costs(g, lanes, rng);
+  auto both = std::make_shared<const FreeCellIndex>(g, std::vector<Cell>{}, ActionModel::kRotation,
+                                                    StepCosts{2.0, 2.0});
+  expect_rows_shortest_under_costs(g, both, rng);
 }

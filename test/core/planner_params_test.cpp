@@ -81,6 +81,16 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   EXPECT_EQ(value("paper", warehouse, 400, "swap"), "0");
   EXPECT_EQ(value("paper", warehouse, 400, "lg-contraflow"), "0");
   EXPECT_EQ(value("default", warehouse, 400, "lg-contraflow"), "0.1");
+  // Rule lanes: one-way lanes in the rotation model only; the paper has none.
+  auto lane = [&](const std::string& preset, ActionModel model) {
+    Params p;
+    p.set("preset", preset);
+    PlannerParams v = PlannerParams::resolve("gd-rhcr", p, MapFacts(warehouse, 400, model));
+    return std::pair{v.text("lane-cost"), step_costs(v, model).lane};
+  };
+  EXPECT_EQ(lane("default", ActionModel::kRotation), std::pair(std::string("2"), 2.0));
+  EXPECT_EQ(lane("default", ActionModel::kMapf), std::pair(std::string("0"), 0.0));
+  EXPECT_EQ(lane("paper", ActionModel::kRotation), std::pair(std::string("0"), 0.0));
   // Given values win over the preset and the rules, and say so.
   Params p;
   p.set("preset", "paper");
@@ -111,6 +121,19 @@ TEST(PlannerParams, UnknownAndOutOfRangeParametersAreErrorsNamingThem) {
   EXPECT_NE(message("gd-rhcr", "lg-far-cost", "-0.5").find("lg-far-cost"), std::string::npos);
   EXPECT_NE(message("gd-rhcr", "swap", "2").find("swap must be in [0, 1]"), std::string::npos);
   EXPECT_NE(message("gd-rhcr", "preset", "fast").find("preset must be one of default, paper"), std::string::npos);
+  EXPECT_NE(message("gd-rhcr", "lane-cost", "9").find("lane-cost must be in [0, 8]"), std::string::npos);
+  for (const char* cost : {"lane-cost", "traffic-cost"}) {  // step costs outside the rotation model
+    Params p;
+    p.set(cost, "1");
+    const PlannerParams v = PlannerParams::resolve("gd-rhcr", p, MapFacts(g, 4));
+    try {
+      step_costs(v, ActionModel::kMapf);
+      ADD_FAILURE() << cost << " accepted in the mapf model";
+    } catch (const ParamError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string(cost) + " applies to the rotation model only"),
+                std::string::npos);
+    }
+  }
   // Experiments that were not kept are gone.
   for (const char* gone : {"secondary-stay", "solver2", "lg-keep-optimal", "lg-refresh"})
     EXPECT_NE(message("gd-rhcr", gone, "1").find(gone), std::string::npos) << gone;

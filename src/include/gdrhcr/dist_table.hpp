@@ -27,14 +27,16 @@
 // 2 steps, so the excess is 0, 1 or 2). row[c] reads the least distance over c's headings,
 // row.at(c, h) the distance from heading h; in the mapf model both read the cell distance.
 //
-// Traffic cost (issue 24, congestion; after the traffic-flow costs of Chen et al., AAAI 2024,
-// and the guidance graphs of Zhang et al., IJCAI 2024, here derived from the map alone): in the
-// rotation model a forward move into a cell may cost more than 1, by how many shortest paths pass
-// through the cell (a sampled betweenness), so rows lead around the map's busiest cells when the
-// detour is short, and traffic that would all cross the middle of a city spreads out. Rows are
-// then computed by Dial's algorithm; a turn still costs 1, so the excess bits hold. Off (all
-// costs 1, plain BFS) unless asked for.
-//
+// Step costs (issue 24, congestion; rotation model only; off unless asked for). A forward move
+// may cost more than 1, so rows are computed by Dial's algorithm; a turn still costs 1, so the
+// excess bits hold. Two costs add up:
+//   - traffic cost (after the traffic-flow costs of Chen et al., AAAI 2024): a move into a cell
+//     costs more by how many shortest paths pass through the cell (a sampled betweenness), so
+//     rows lead around the map's busiest cells when the detour is short, and traffic that would
+//     all cross the middle of a city spreads out;
+//   - lane cost: a move against the direction of the one-way lane it is in (lanes.hpp, derived
+//     from the map's aisles) costs more, so rows send traffic one way along each aisle.
+
 // Thread-safe: parallel groups query it at once. Two threads asking for the same missing row at
 // the same moment may both run its BFS (counted); one copy is kept.
 #pragma once
@@ -50,16 +52,24 @@
 #include "gdrhcr/action_model.hpp"
 #include "gdrhcr/grid.hpp"
 
+
 namespace gdrhcr {
 
 constexpr int kUnreachable = INT32_MAX / 4;
+
+// Extra costs of forward moves in the rotation model (see the file comment); 0 = none.
+struct StepCosts {
+  double traffic = 0;  // up to this much more into the busiest cells
+  double lane = 0;     // this much more against a lane's direction
+  bool any() const { return traffic > 0 || lane > 0; }
+};
 
 // The free cells of a grid as dense slots 0..F-1 (in increasing cell order), the neighbour lists
 // in slot space, and the cell -> slot map (obstacles -> F). Built once per DistTable and shared
 // by its rows, so a row outliving its table stays readable.
 struct FreeCellIndex {
   explicit FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked = {},
-                         ActionModel model = ActionModel::kMapf, double traffic_cost = 0);
+                         ActionModel model = ActionModel::kMapf, StepCosts costs = {});
   ActionModel model = ActionModel::kMapf;
   int32_t num_free = 0;
   std::vector<int32_t> slot_of;       // per grid cell; num_free for obstacles
@@ -68,11 +78,14 @@ struct FreeCellIndex {
   std::vector<int32_t> adj;           //   adj[adj_begin[s] .. adj_begin[s+1])
   std::vector<uint8_t> blocked;       // per slot; empty when nothing is blocked
   std::vector<int32_t> faced;         // rotation: 4 per slot, the slot heading h faces, or num_free
-  std::vector<uint8_t> cost;          // rotation with traffic cost: per slot, a forward move into it
+  std::vector<uint8_t> cost;          // rotation with step costs: per state (4 slot + heading h),
+                                      //   a forward move in heading h into the slot; else empty
   int32_t max_cost = 1;               // the largest step cost
   static constexpr int kTrafficRoots = 64;
   static constexpr double kTrafficPercentile = 0.99;
-  void compute_traffic_cost(double strength);
+  void add_traffic_cost(double strength);
+  void add_lane_cost(const Grid& grid, double extra);
+  void raise_cost(int32_t slot, int heading, long extra);
   // A shortest path over (cell, heading) states makes at most F - 1 moves, at most one turn
   // between two moves and two before the first, so its length is below 2F: rotation rows are
   // 16 bits up to half as many free cells.
@@ -144,14 +157,17 @@ class DistTable {
   DistTable(const Grid& grid, ActionModel model, size_t budget_bytes = kDefaultBudgetBytes);
   DistTable(const Grid& grid, const std::vector<Cell>& blocked, ActionModel model,
             size_t budget_bytes = kDefaultBudgetBytes);
-  // Rotation rows with a traffic cost (0 = none): see the file comment.
-  DistTable(const Grid& grid, ActionModel model, size_t budget_bytes, double traffic_cost);
+  // Rotation rows with step costs: see the file comment.
+  DistTable(const Grid& grid, ActionModel model, size_t budget_bytes, StepCosts costs);
+  DistTable(const Grid& grid, const std::vector<Cell>& blocked, ActionModel model, size_t budget_bytes,
+            StepCosts costs);
 
   // The row for `goal`, computing it on first use. Throws std::out_of_range for a blocked goal.
   std::shared_ptr<const DistRow> row(Cell goal) const;
   int get(Cell goal, Cell from) const { return (*row(goal))[from]; }
   int get(Cell goal, Cell from, Heading h) const { return row(goal)->at(from, h); }
   ActionModel action_model() const { return index_->model; }
+  const StepCosts& step_costs() const { return costs_; }
 
   // Computes the missing rows among `goals` in parallel (oneTBB), as a batch warm-up. Goals
   // that are not free cells are skipped. Rows are inserted as if queried in the given order.
@@ -187,6 +203,7 @@ class DistTable {
 
   const Grid& grid_;
   std::shared_ptr<const FreeCellIndex> index_;
+  StepCosts costs_;
   uint64_t id_;
   size_t budget_;
   mutable std::shared_mutex mutex_;

@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "gdrhcr/dist_table.hpp"
 #include "gdrhcr/grid.hpp"
 #include "gdrhcr/params.hpp"
 
@@ -36,13 +37,16 @@ struct ParamSpec {
 // What the map-dependent rules read: the map and the fleet.
 class MapFacts {
  public:
-  MapFacts(const Grid& grid, int num_agents) : grid_(&grid), num_agents_(num_agents) {}
+  MapFacts(const Grid& grid, int num_agents, ActionModel model = ActionModel::kMapf)
+      : grid_(&grid), num_agents_(num_agents), model_(model) {}
   int num_agents() const { return num_agents_; }
+  ActionModel model() const { return model_; }
   double cut_cell_share() const;  // computed once, on first use
   double fleet_share() const;     // agents per free cell
  private:
   const Grid* grid_;
   int num_agents_;
+  ActionModel model_;
   mutable std::optional<double> cut_share_;
 };
 
@@ -94,9 +98,9 @@ class PlannerParams {
   std::vector<ParamValue> values_;
 };
 
-// The distance table's traffic cost the parameters ask for (0 when the planner has none). Throws
+// The distance table's step costs the parameters ask for (0 when the planner has none). Throws
 // ParamError when one is asked for outside the rotation model.
-double traffic_cost(const PlannerParams& values, ActionModel model);
+StepCosts step_costs(const PlannerParams& values, ActionModel model);
 
 // Every parameter of `planner`, in table order. Throws ParamError for an unknown planner.
 const std::vector<ParamSpec>& planner_param_specs(const std::string& planner);

@@ -1,0 +1,37 @@
+// One-way lanes derived from a map's structure (issue 24, congestion in the rotation model).
+//
+// Warehouses are grids of one-cell aisles between shelves. Two robots that meet head-on in such
+// an aisle cannot pass: one must turn round (two turns) and back out, and the robots behind it
+// too. The League's winners send traffic one way along each aisle, alternating from one aisle to
+// the next, like the streets of a city grid (WPPL's hand-made guidance graphs for the warehouse
+// maps, Jiang et al., arXiv 2404.16162; Zhang et al., "Guidance Graph Optimization for Lifelong
+// MAPF", IJCAI 2024). Here the aisles are found from the map, never from its name:
+//   - a row (column) is open when at least half of its cells are free;
+//   - a run of open rows one row high, between rows that are not open (shelves), is an aisle:
+//     a one-way lane. Successive lanes alternate: east, west, east, ... (columns: south, north);
+//   - wider runs of open rows are open areas (a depot, a random map, a room), and get no
+//     direction: there robots pass each other without turning round.
+// A lane gives a direction only; DistTable makes a forward move against it dearer (lane-cost),
+// so distances, and every planner that follows them, prefer the lane's way but may still take
+// a short way back (it is a cost, not a rule, and never needed for a valid plan).
+#pragma once
+
+#include <vector>
+
+#include "gdrhcr/action_model.hpp"
+#include "gdrhcr/grid.hpp"
+
+namespace gdrhcr {
+
+struct Lanes {
+  std::vector<Heading> row;  // per row: kEast or kWest for a lane, kNoHeading otherwise
+  std::vector<Heading> col;  // per column: kSouth or kNorth for a lane, kNoHeading otherwise
+
+  // True when a forward move in heading h into cell c goes against its row's or column's lane.
+  bool against(const Grid& grid, Cell c, Heading h) const;
+  int num_lanes() const;
+};
+
+Lanes derive_lanes(const Grid& grid);
+
+}  // namespace gdrhcr

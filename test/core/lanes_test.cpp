@@ -1,0 +1,62 @@
+// One-way lanes derived from the map (lanes.hpp): aisles one cell wide between shelves get
+// alternating directions, open areas and random maps get none.
+#include <gtest/gtest.h>
+
+#include "gdrhcr/lanes.hpp"
+
+using namespace gdrhcr;
+
+namespace {
+std::string repo(const std::string& rel) { return std::string(GDRHCR_SOURCE_DIR) + "/" + rel; }
+}  // namespace
+
+TEST(Lanes, AislesBetweenShelvesAlternateAndOpenAreasHaveNone) {
+  // Rows 0, 2, 4, 6 are aisles between shelf rows; rows 7-8 are an open area two rows high;
+  // columns 0 and 11 run past the shelf ends, and every column is at least half free.
+  const Grid g = Grid::from_rows({"............", ".@@@@@@@@@@.", "............", ".@@@@@@@@@@.",
+                                  "............", ".@@@@@@@@@@.", "............", "@@@@@@@@@@@@",
+                                  "............", "............"});
+  const Lanes l = derive_lanes(g);
+  const std::vector<Heading> rows = {kEast, kNoHeading, kWest, kNoHeading, kEast, kNoHeading, kWest,
+                                     kNoHeading, kNoHeading, kNoHeading};
+  EXPECT_EQ(l.row, rows);
+  EXPECT_EQ(l.col, std::vector<Heading>(12, kNoHeading));
+  EXPECT_EQ(l.num_lanes(), 4);
+  EXPECT_TRUE(l.against(g, g.cell(5, 2), kEast));  // row 2 goes west
+  EXPECT_FALSE(l.against(g, g.cell(5, 2), kWest));
+  EXPECT_FALSE(l.against(g, g.cell(0, 3), kNorth));  // no column lanes
+  EXPECT_FALSE(l.against(g, g.cell(5, 8), kWest));   // open area
+}
+
+TEST(Lanes, ColumnsOfOneCellAisles) {
+  // The transposed layout: aisles are columns 0, 2, 4 (south, north, south).
+  const Grid g = Grid::from_rows({".....", ".@.@.", ".@.@.", ".@.@.", ".@.@.", "....."});
+  const Lanes l = derive_lanes(g);
+  EXPECT_EQ(l.col, (std::vector<Heading>{kSouth, kNoHeading, kNorth, kNoHeading, kSouth}));
+  EXPECT_TRUE(l.against(g, g.cell(2, 3), kSouth));
+  EXPECT_FALSE(l.against(g, g.cell(2, 3), kNorth));
+}
+
+TEST(Lanes, TheBenchmarkMapsTheirStructureCalls) {
+  // Warehouses with one-cell aisles get lanes along them: rows and columns, or rows only where
+  // the cross aisles are two cells wide (lorr-warehouse-140-500). Random, room and empty maps,
+  // and warehouses whose aisles are all two cells wide, get none.
+  struct Case {
+    const char* map;
+    bool rows, cols;
+  };
+  for (const Case& c : {Case{"maps/warehouse-10-20-10-2-1.map", true, true}, Case{"maps/sortation-1.map", true, true},
+                        Case{"maps/lorr-warehouse-140-500.map", true, false},
+                        Case{"maps/random-32-32-20.map", false, false}, Case{"maps/room-64-64-8.map", false, false},
+                        Case{"maps/empty-48-48.map", false, false},
+                        Case{"maps/warehouse-10-20-10-2-2.map", false, false}}) {
+    const Lanes l = derive_lanes(Grid::load(repo(c.map)));
+    int rows = 0, cols = 0;
+    for (Heading h : l.row) rows += h != kNoHeading;
+    for (Heading h : l.col) cols += h != kNoHeading;
+    EXPECT_EQ(rows > 5, c.rows) << c.map << ": " << rows << " row lanes";
+    EXPECT_EQ(cols > 5, c.cols) << c.map << ": " << cols << " column lanes";
+    if (!c.rows) EXPECT_EQ(rows, 0) << c.map;
+    if (!c.cols) EXPECT_EQ(cols, 0) << c.map;
+  }
+}
