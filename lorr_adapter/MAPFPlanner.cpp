@@ -19,10 +19,11 @@ namespace {
 
 MAPFPlanner::~MAPFPlanner() { delete env; }
 
-void MAPFPlanner::initialize(int /*preprocess_time_limit*/) {
+void MAPFPlanner::initialize(int preprocess_time_limit) {
   try {
-    bridge_ = std::make_unique<gdrhcr_lorr::Bridge>(env->rows, env->cols, env->map, env->num_of_agents,
-                                                   gdrhcr_lorr::bridge_options_from_env());
+    gdrhcr_lorr::BridgeOptions options = gdrhcr_lorr::bridge_options_from_env();
+    options.preprocess_s = preprocess_time_limit;
+    bridge_ = std::make_unique<gdrhcr_lorr::Bridge>(env->rows, env->cols, env->map, env->num_of_agents, options);
   } catch (const std::exception& e) {
     fail("initialize", e);
   }

@@ -7,12 +7,14 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_set>
 
 #include "gdrhcr/dist_table.hpp"
 #include "gdrhcr/grid.hpp"
+#include "gdrhcr/map_prep.hpp"
 #include "gdrhcr/mapf_in_rotation.hpp"
 #include "gdrhcr/params.hpp"
 #include "gdrhcr/planner.hpp"
@@ -92,6 +94,7 @@ BridgeOptions bridge_options_from_env() {
   o.times_out = env_or("GDRHCR_TIMES_OUT", "");
   o.seed = static_cast<uint64_t>(env_number("GDRHCR_SEED", 0));
   o.dist_budget_mb = static_cast<int>(env_number("GDRHCR_DIST_MB", o.dist_budget_mb));
+  o.prep_dir = env_or("GDRHCR_PREP_DIR", "");
   if (o.dist_budget_mb < 1) throw std::invalid_argument("GDRHCR_DIST_MB must be at least 1");
   try {
     o.turns = env_or("GDRHCR_TURNS", "");
@@ -212,8 +215,50 @@ struct Bridge::Impl {
   std::vector<Cell> last_goal;     // per agent: the goal it was last planned with
 };
 
+namespace {
+
+// The offline preparation for this map and fleet (GDRHCR_PREP_DIR): loaded from its cache file,
+// or made within a third of the preprocessing limit and cached. Its traffic cost joins the
+// planner's parameters unless they set one. Optional: a failure is reported and the run goes on.
+BridgeOptions with_prep(BridgeOptions o, const Grid& grid, int n) {
+  if (o.prep_dir.empty() || !planner_has_param(o.planner, "traffic-cost")) return o;
+  for (auto& [k, v] : o.params)
+    if (Params::canonical(k) == "traffic-cost") return o;
+  const std::string path = o.prep_dir + "/" + prep_file_name(grid, n, ActionModel::kRotation);
+  MapPrep prep;
+  try {
+    prep = load_prep(path, grid, n, ActionModel::kRotation);
+    std::fprintf(stderr, "gdrhcr lorr adapter: preparation loaded from %s\n", path.c_str());
+  } catch (const PrepError& e) {
+    if (std::ifstream(path).good())
+      std::fprintf(stderr, "gdrhcr lorr adapter: %s; preparing again\n", e.what());
+    else
+      std::fprintf(stderr, "gdrhcr lorr adapter: no preparation file %s yet; preparing\n", path.c_str());
+    PrepOptions po;
+    po.agents = n;
+    po.planner = o.planner;
+    for (auto& [k, v] : o.params) po.given.set(k, v);
+    po.seed = o.seed;
+    po.dist_budget_mb = o.dist_budget_mb;
+    const double per_step = po.step_budget_s * 2;  // a step's time with the work around the budget
+    const double room = o.preprocess_s > 0 ? o.preprocess_s / 3 : 600;
+    po.steps = std::max(20, std::min(po.steps, int(room / (per_step * po.traffic_costs.size()))));
+    prep = prepare_map(grid, po);
+    try {
+      save_prep(prep, path);
+    } catch (const PrepError& w) {
+      std::fprintf(stderr, "gdrhcr lorr adapter: %s (the preparation is used, not cached)\n", w.what());
+    }
+  }
+  std::fprintf(stderr, "gdrhcr lorr adapter: traffic-cost %g from the preparation\n", prep.traffic_cost);
+  o.params.emplace_back("traffic-cost", std::to_string(prep.traffic_cost));
+  return o;
+}
+
+}  // namespace
+
 Bridge::Bridge(int rows, int cols, const std::vector<int>& map, int num_agents, const BridgeOptions& options)
-    : impl_(std::make_unique<Impl>(rows, cols, map, num_agents, options)) {}
+    : impl_(std::make_unique<Impl>(rows, cols, map, num_agents, with_prep(options, grid_of(rows, cols, map), num_agents))) {}
 
 Bridge::~Bridge() = default;
 

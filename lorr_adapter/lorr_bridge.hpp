@@ -24,6 +24,12 @@ namespace gdrhcr_lorr {
 //   GDRHCR_SEED       seed for the planner's tie-breaks (default 0)
 //   GDRHCR_DIST_MB    memory for distance rows (default 2048: a fleet of 10,000 on LoRR's
 //                     warehouse holds about 10,000 rows of 77 KB)
+//   GDRHCR_PREP_DIR   offline preparation (gdrhcr/map_prep.hpp) cached in this directory: in the
+//                     Start-Kit's preprocessing phase the adapter loads the file for this map,
+//                     fleet size and model, or makes it (trials of at most a third of the
+//                     preprocessing limit) and writes it there; its traffic cost applies unless
+//                     GDRHCR_PARAMS sets one. Unset: no preparation. A bad file is reported on
+//                     standard error and made again
 //   GDRHCR_TURNS      mapf-wait (the planner's mapf steps with turns and waits,
 //                     gdrhcr::MapfInRotation) or native (its own rotation planning); default
 //                     gdrhcr::kLorrTurnPlanning
@@ -35,6 +41,8 @@ struct BridgeOptions {
   uint64_t seed = 0;
   std::string turns;  // "native" or "mapf-wait"; empty = gdrhcr::kLorrTurnPlanning
   int dist_budget_mb = 2048;
+  std::string prep_dir;     // GDRHCR_PREP_DIR; empty = no offline preparation
+  double preprocess_s = 0;  // the Start-Kit's preprocessing limit (0 = none given)
 };
 // Throws std::invalid_argument naming the variable for a malformed value.
 BridgeOptions bridge_options_from_env();

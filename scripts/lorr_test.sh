@@ -58,3 +58,16 @@ if problems:
 print(f"lorr_test: OK: AllValid Yes, no errors, {r['numTaskFinished']} tasks finished in 60 steps; "
       "gdrhcr_sim --lorr-problem writes the same output")
 PY
+
+# Offline preparation in the Start-Kit's preprocessing phase (issue 24 item 2): the first run
+# makes the file for this map and fleet in GDRHCR_PREP_DIR, the second loads it; both valid.
+mkdir -p "$tmp/prep"
+for run in 1 2; do
+  GDRHCR_PREP_DIR=$tmp/prep bash "$top/scripts/bench_lorr.sh" "$kit" "$instance" 60 "$tmp/prep$run.json" 0 \
+    2>"$tmp/prep$run.err" >/dev/null || { cat "$tmp/prep$run.err"; echo "lorr_test: FAIL: run $run with GDRHCR_PREP_DIR"; exit 1; }
+  grep -q '"AllValid": "Yes"' "$tmp/prep$run.json" || { echo "lorr_test: FAIL: run $run with a preparation is not valid"; exit 1; }
+done
+files=("$tmp"/prep/gdrhcr-prep-*-6-rotation.json)
+grep -q "no preparation file .* yet; preparing" "$tmp/prep1.err" && grep -q "preparation loaded from" "$tmp/prep2.err" &&
+  [ -f "${files[0]}" ] || { cat "$tmp/prep1.err" "$tmp/prep2.err"; echo "lorr_test: FAIL: the preparation was not made, cached and loaded"; exit 1; }
+echo "lorr_test: OK: the preparation was made in the first run's preprocessing and loaded in the second"

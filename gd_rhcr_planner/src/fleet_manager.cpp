@@ -9,6 +9,8 @@
 #include <numeric>
 #include <sstream>
 
+#include "gdrhcr/map_prep.hpp"
+
 namespace gd_rhcr_planner {
 namespace {
 
@@ -88,6 +90,7 @@ FleetManager::FleetManager(const gdrhcr::Grid& grid, FleetConfig cfg, Log sink)
   live_.dispatch_switch_margin = cfg_.dispatch.switch_margin;
   live_.dispatch_finish_horizon = cfg_.dispatch.finish_horizon;
   gdrhcr::Params given = cfg_.planner_params;
+  apply_prep(given);
   const auto values = gdrhcr::PlannerParams::resolve(cfg_.planner, given, gdrhcr::MapFacts(grid_, cfg_.num_robots, cfg_.model()));
   given.check_all_used("planner " + cfg_.planner);  // a parameter the planner lacks is an error naming it
   dist_ = std::make_unique<gdrhcr::DistTable>(grid_, cfg_.model(), size_t(cfg_.dist_budget_mb) << 20,
@@ -135,6 +138,21 @@ std::unique_ptr<DeadlinePlanner> FleetManager::make_deadline_planner(std::unique
   gdrhcr::Params none;
   return std::make_unique<DeadlinePlanner>(std::move(primary),
                                            gdrhcr::make_planner("pibt", none, grid_, cfg_.num_robots, cfg_.seed, cfg_.model()));
+}
+
+// The offline preparation file (~prep_file), made by `gdrhcr_sim --prepare`: its traffic cost
+// joins the planner's parameters unless they set one. Optional: a file that is missing or made
+// for another map, fleet size or model is reported and the node runs without it.
+void FleetManager::apply_prep(gdrhcr::Params& given) const {
+  if (cfg_.prep_file.empty()) return;
+  try {
+    const auto prep = gdrhcr::load_prep(cfg_.prep_file, grid_, cfg_.num_robots, cfg_.model());
+    const bool applied = gdrhcr::planner_has_param(cfg_.planner, "traffic-cost") && prep.apply(given) > 0;
+    log(LogLevel::kInfo, "preparation " + cfg_.prep_file + ": traffic-cost " + number(prep.traffic_cost) +
+                             (applied ? "" : " (not applied: set in planner_params or not a parameter of the planner)"));
+  } catch (const gdrhcr::PrepError& e) {
+    log(LogLevel::kWarn, std::string(e.what()) + "; running without it");
+  }
 }
 
 void FleetManager::log(LogLevel level, const std::string& msg) const {
@@ -817,7 +835,8 @@ const std::vector<std::string>& node_param_names() {
       "map", "planner", "frame_id", "cell_size", "tick_rate", "num_robots", "seed", "per_robot_topics",
       "publish_markers", "label_limit", "dist_budget_mb", "plan_deadline", "offline_timeout", "commit_horizon",
       "dispatch_rate", "show_goal_lines", "dispatcher", "dispatch_finish_horizon", "dispatch_switch_margin",
-      "dispatch_max_tasks", "dispatch_age_weight", "task_store", "planner_params", "action_model"};
+      "dispatch_max_tasks", "dispatch_age_weight", "task_store", "planner_params", "action_model",
+      "prep_file"};
   return names;
 }
 

@@ -119,6 +119,7 @@ FleetConfig PlannerNode::load_config() {
   pnh_.param("label_limit", label_limit_, 60);
   pnh_.param("show_goal_lines", show_goal_lines_, false);
   pnh_.param("dist_budget_mb", c.dist_budget_mb, c.dist_budget_mb);
+  pnh_.param("prep_file", c.prep_file, c.prep_file);
   pnh_.param("plan_deadline", c.plan_deadline, 0.0);
   pnh_.param("offline_timeout", c.offline_timeout, c.offline_timeout);
   pnh_.param("commit_horizon", c.commit_horizon, c.commit_horizon);

@@ -18,6 +18,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "gd_rhcr_planner/fleet_manager.hpp"
+#include "gdrhcr/map_prep.hpp"
 
 using namespace gd_rhcr_planner;
 using gdrhcr::Cell;
@@ -561,4 +562,42 @@ TEST(FleetManager, ActionModelIsCheckedAndRotationNeedsHeadings) {
   rep.id = 1, rep.heading = 7;
   EXPECT_EQ(fm.update_robots({rep}, 0.1, err), 1);
   EXPECT_NE(err.find("unknown heading"), std::string::npos) << err;
+}
+
+// ~prep_file (issue 24 item 2): a preparation made for this map, fleet size and model sets the
+// traffic cost of the node's distance table; one made for another map is reported and the node
+// runs without it. In the rotation model the aisles are one-way lanes (rule lanes).
+TEST(FleetManager, APreparationFileForThisMapSetsTheTrafficCost) {
+  const Grid g = warehouse();
+  gdrhcr::MapPrep prep;
+  prep.map_key = gdrhcr::map_key(g);
+  prep.width = g.width(), prep.height = g.height(), prep.agents = 4;
+  prep.model = gdrhcr::ActionModel::kRotation;
+  prep.planner = "gd-rhcr";
+  prep.traffic_cost = 2;
+  const std::string path = journal_path() + ".prep.json";
+  gdrhcr::save_prep(prep, path);
+  FleetConfig c = config("gd-rhcr", 4);
+  c.action_model = "rotation";
+  c.prep_file = path;
+  std::vector<std::string> warnings;
+  auto sink = [&](LogLevel level, const std::string& msg) {
+    if (level == LogLevel::kWarn) warnings.push_back(msg);
+  };
+  {
+    FleetManager fm(g, c, sink);
+    EXPECT_EQ(fm.step_costs().traffic, 2.0);
+    EXPECT_EQ(fm.step_costs().lane, 2.0);
+    EXPECT_TRUE(warnings.empty());
+  }
+  prep.map_key = "0123456789abcdef";
+  gdrhcr::save_prep(prep, path);
+  {
+    FleetManager fm(g, c, sink);
+    EXPECT_EQ(fm.step_costs().traffic, 0.0);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("was made for another map"), std::string::npos) << warnings[0];
+  }
+  EXPECT_EQ(FleetManager(g, config("gd-rhcr", 4)).step_costs().lane, 0.0);  // no lanes in mapf
+  std::remove(path.c_str());
 }

@@ -12,6 +12,7 @@
 
 #include "gdrhcr/distinct_goal_stream.hpp"
 #include "gdrhcr/lorr_io.hpp"
+#include "gdrhcr/map_prep.hpp"
 #include "gdrhcr/mapf_in_rotation.hpp"
 #include "gdrhcr/planner_params.hpp"
 #include "gdrhcr/simulator.hpp"
@@ -52,6 +53,11 @@ const char* kUsage =
     "  --quiet             no summary on standard error\n"
     "  --list-params       print the planner's parameters with the values in force for --map and\n"
     "                      --agents (or --lorr-problem), then exit\n"
+    "  --prepare FILE      offline preparation (rotation model): simulate --steps steps (300 is\n"
+    "                      enough) per candidate traffic cost with --agents on --map, random goals,\n"
+    "                      write the choice to FILE (map_prep.hpp), then exit\n"
+    "  --prep FILE         use a preparation file made for this map, fleet size and model: its\n"
+    "                      traffic cost applies unless --traffic-cost is given\n"
     "  --PARAM VALUE       a planner parameter; each planner's are listed below\n";
 
 // Every planner's parameters: name, range, default (or the rule that picks it), meaning.
@@ -122,7 +128,7 @@ int parse_args(int argc, char** argv, Params& args, Flags& flags) {
 // The run's options (everything but the planner's own parameters).
 struct RunOptions {
   std::string lorr_path, lorr_out, map_path, task_kind, pickups_file, deliveries_file, planner;
-  std::string out_path, paths_path;
+  std::string out_path, paths_path, prepare_path, prep_path;
   int agents = 100, steps = 500, lookahead = 3, budget_mb = 256;
   uint64_t seed = 0;
   bool distinct_goals = false;
@@ -168,6 +174,8 @@ RunOptions read_options(Params& args) {
   o.distinct_goals = args.get_int("distinct-goals", 0, 0, 1) == 1;
   o.out_path = args.get_string("out", "");
   o.paths_path = args.get_string("paths", "");
+  o.prepare_path = args.get_string("prepare", "");
+  o.prep_path = args.get_string("prep", "");
   if (o.task_kind == "random" && (!o.pickups_file.empty() || !o.deliveries_file.empty()))
     throw ParamError("--pickups/--deliveries only apply to --tasks mapd");
   return o;
@@ -241,9 +249,35 @@ void write_text(const std::string& path, const std::string& text) {
   out << text;
 }
 
+// --prepare: the offline preparation's trials, written to the file.
+int prepare(const RunOptions& o, const Grid& grid, const Params& args, const Flags& flags) {
+  PrepOptions po;
+  po.agents = o.agents;
+  po.model = o.action_model;
+  po.planner = o.planner;
+  po.given = args;
+  po.steps = o.steps;
+  po.seed = o.seed;
+  po.dist_budget_mb = o.budget_mb;
+  const MapPrep prep = prepare_map(grid, po);
+  save_prep(prep, o.prepare_path);
+  if (!flags.quiet)
+    for (auto& t : prep.trials)
+      std::fprintf(stderr, "traffic-cost %g: %ld goals in %d steps (%.1f s)\n", t.traffic_cost, t.goals, prep.steps,
+                   t.seconds);
+  std::printf("%s: traffic-cost %g\n", o.prepare_path.c_str(), prep.traffic_cost);
+  return 0;
+}
+
 int run(Params& args, const Flags& flags) {
   const RunOptions o = read_options(args);
   const Grid grid = o.lorr ? std::move(o.lorr->grid) : Grid::load(o.map_path);
+  if (!o.prepare_path.empty()) return prepare(o, grid, args, flags);
+  nlohmann::json prep_record;
+  if (!o.prep_path.empty()) {
+    const MapPrep prep = load_prep(o.prep_path, grid, o.agents, o.action_model);
+    prep_record = {{"file", o.prep_path}, {"applied", prep.apply(args) > 0}, {"prep", prep.to_json()}};
+  }
   const PlannerParams values = PlannerParams::resolve(o.planner, args, MapFacts(grid, o.agents, o.action_model));
   args.check_all_used("gdrhcr_sim --planner " + o.planner);
   if (flags.list_params) {
@@ -275,7 +309,12 @@ int run(Params& args, const Flags& flags) {
     write_text(o.lorr_out,
                lorr_output(grid, r.paths, recorded.goals(), o.lookahead, ids, rotation ? &r.headings : nullptr).dump() + "\n");
   }
-  write_text(o.out_path, result_json(o, r, *planner, values, task_info, dist).dump(2) + "\n");
+  nlohmann::json result = result_json(o, r, *planner, values, task_info, dist);
+  if (!prep_record.is_null()) {
+    result["prep"] = prep_record;
+    if (prep_record["applied"].get<bool>()) result["param_sources"]["traffic-cost"] = "prep " + o.prep_path;
+  }
+  write_text(o.out_path, result.dump(2) + "\n");
   if (!flags.quiet)
     std::fprintf(stderr,
                  "%s (%s model) on %s, %d agents, %d steps: throughput %.3f (free flow %.3f), %ld goals, "

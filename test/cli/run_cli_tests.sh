@@ -225,5 +225,25 @@ PY
   fi
 done
 
+# Offline preparation (issue 24 item 2): --prepare writes the choice for the map, fleet and model;
+# --prep applies it (recorded as its source) unless --traffic-cost is given; a file made for
+# another map or fleet is refused by name.
+if "$sim" --map "$m" --planner gd-rhcr --agents 40 --steps 30 --seed 1 --action-model rotation --step-budget 0 \
+     --prepare "$tmp/prep.json" --quiet >/dev/null &&
+   "$sim" --map "$m" --planner gd-rhcr --agents 40 --steps 20 --action-model rotation --prep "$tmp/prep.json" \
+     --quiet --out "$tmp/prepped.json" &&
+   /usr/bin/python3 - "$tmp/prep.json" "$tmp/prepped.json" <<'PY'
+import json, sys
+prep, r = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
+assert prep["format"] == "gdrhcr-prep/1" and prep["agents"] == 40 and len(prep["trials"]) == 2, prep
+assert prep["traffic_cost"] in [t["traffic_cost"] for t in prep["trials"]], prep
+assert r["prep"]["applied"] and r["params"]["traffic_cost"] == prep["traffic_cost"], r["prep"]
+assert r["param_sources"]["traffic-cost"].startswith("prep "), r["param_sources"]["traffic-cost"]
+PY
+then ok "--prepare then --prep applies the prepared traffic cost"; else bad "--prepare / --prep"; fi
+expect_error "--prep for another fleet size" "made for 40 agents, not 41" --map "$m" --planner gd-rhcr --agents 41 --steps 5 --action-model rotation --prep "$tmp/prep.json"
+expect_error "--prep for another map" "was made for another map" --map "$repo/maps/room-32-32-4.map" --planner gd-rhcr --agents 40 --steps 5 --action-model rotation --prep "$tmp/prep.json"
+expect_error "--prepare in the mapf model" "rotation model only" --map "$m" --planner gd-rhcr --agents 40 --steps 5 --prepare "$tmp/prep2.json"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

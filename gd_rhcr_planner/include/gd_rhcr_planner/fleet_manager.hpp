@@ -51,6 +51,7 @@ struct FleetConfig {
   DispatchParams dispatch;
   std::string task_store;         // journal path; "" = off
   std::string action_model = "mapf";  // the robots' moves: mapf (any neighbour) or rotation (turns; issue 23)
+  std::string prep_file;          // offline preparation (gdrhcr/map_prep.hpp); "" = none
   // Fills defaults (plan_deadline 0) and throws gdrhcr::ParamError naming a bad value.
   void validate();
   gdrhcr::ActionModel model() const;  // action_model parsed (after validate)
@@ -177,6 +178,8 @@ class FleetManager {
 
   const gdrhcr::Grid& grid() const { return grid_; }
   const FleetConfig& config() const { return cfg_; }
+  // The distance table's step costs (rotation: lanes, and the traffic cost of ~prep_file).
+  const gdrhcr::StepCosts& step_costs() const { return dist_->step_costs(); }
   uint64_t tick_count() const;
 
  private:
@@ -199,6 +202,7 @@ class FleetManager {
   void problem_locked(const std::string& what);
   std::string config_string_locked(const LiveConfig& c) const;
   void log(LogLevel level, const std::string& msg) const;
+  void apply_prep(gdrhcr::Params& given) const;
   // At most one message per `key` every `period` seconds (steady clock).
   void log_every(const std::string& key, double period, LogLevel level, const std::string& msg);
   std::unique_ptr<DeadlinePlanner> make_deadline_planner(std::unique_ptr<gdrhcr::Planner> primary) const;

@@ -1,0 +1,106 @@
+// Offline preparation (map_prep.hpp): trials on the map pick the traffic cost by the goals they
+// reach, the file is keyed by the map, and a file for another map, fleet or model, or no
+// preparation file at all, is refused with the reason.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+
+#include "gdrhcr/map_prep.hpp"
+
+using namespace gdrhcr;
+
+namespace {
+std::string repo(const std::string& rel) { return std::string(GDRHCR_SOURCE_DIR) + "/" + rel; }
+
+std::string refusal(const std::string& path, const Grid& g, int agents, ActionModel model) {
+  try {
+    load_prep(path, g, agents, model);
+  } catch (const PrepError& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+}  // namespace
+
+TEST(MapPrep, TheKeyFollowsTheMapsCells) {
+  const Grid a = Grid::from_rows({"....", ".@..", "...."});
+  const Grid same = Grid::from_rows({"....", ".@..", "...."});
+  const Grid moved = Grid::from_rows({"....", "..@.", "...."});
+  const Grid wider = Grid::from_rows({".....", ".@...", "....."});
+  EXPECT_EQ(map_key(a), map_key(same));
+  EXPECT_NE(map_key(a), map_key(moved));
+  EXPECT_NE(map_key(a), map_key(wider));
+  EXPECT_EQ(map_key(a).size(), 16u);
+}
+
+TEST(MapPrep, TrialsPickTheCostThatReachesMostGoalsAndTheFileRoundTrips) {
+  const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+  PrepOptions o;
+  o.agents = 60;
+  o.steps = 60;
+  o.step_budget_s = 0;  // deterministic
+  const MapPrep p = prepare_map(g, o);
+  ASSERT_EQ(p.trials.size(), 2u);
+  for (auto& t : p.trials) EXPECT_GT(t.goals, 0);
+  const PrepTrial& none = p.trials[0];
+  const PrepTrial& two = p.trials[1];
+  const bool switch_to_two = two.goals > none.goals && two.goals > (1 + MapPrep::kMargin) * none.goals;
+  EXPECT_EQ(p.traffic_cost, switch_to_two ? 2.0 : 0.0);
+  EXPECT_EQ(prepare_map(g, o).trials[1].goals, two.goals);  // a seed fixes the trials
+
+  const std::string path = testing::TempDir() + "/prep_roundtrip.json";
+  save_prep(p, path);
+  const MapPrep back = load_prep(path, g, 60, ActionModel::kRotation);
+  EXPECT_EQ(back.to_json(), p.to_json());
+
+  Params given;
+  EXPECT_EQ(back.apply(given), 1);
+  EXPECT_EQ(given.get_double("traffic-cost", -1, 0, 8), p.traffic_cost);
+  Params set;
+  set.set("traffic_cost", "1");
+  EXPECT_EQ(back.apply(set), 0);  // a given value wins
+  EXPECT_EQ(set.get_double("traffic-cost", -1, 0, 8), 1.0);
+
+  const Grid other = Grid::load(repo("maps/room-32-32-4.map"));
+  EXPECT_TRUE(contains(refusal(path, other, 60, ActionModel::kRotation), "was made for another map")) << refusal(path, other, 60, ActionModel::kRotation);
+  EXPECT_TRUE(contains(refusal(path, g, 61, ActionModel::kRotation), "was made for 60 agents, not 61"));
+  EXPECT_TRUE(contains(refusal(path, g, 60, ActionModel::kMapf), "rotation action model, not mapf"));
+  EXPECT_TRUE(contains(refusal(path + ".missing", g, 60, ActionModel::kRotation), "cannot read"));
+  std::ofstream(path) << "{\"format\": \"something else\"}\n";
+  EXPECT_TRUE(contains(refusal(path, g, 60, ActionModel::kRotation), "not a preparation file"));
+  std::ofstream(path) << "{\"format\": \"gdrhcr-prep/1\", \"map_key\": 3";
+  EXPECT_TRUE(contains(refusal(path, g, 60, ActionModel::kRotation), path));
+  nlohmann::json bad = p.to_json();
+  bad["traffic_cost"] = 50;
+  std::ofstream(path) << bad.dump();
+  EXPECT_TRUE(contains(refusal(path, g, 60, ActionModel::kRotation), "traffic_cost 50 is not in [0, 8]"));
+  std::remove(path.c_str());
+}
+
+TEST(MapPrep, BadOptionsAreErrorsNamingThem) {
+  const Grid g = Grid::from_rows({"....", "....", "...."});
+  PrepOptions o;
+  o.agents = 4;
+  o.steps = 5;
+  o.model = ActionModel::kMapf;
+  EXPECT_THROW(prepare_map(g, o), ParamError);
+  o.model = ActionModel::kRotation;
+  o.agents = 13;
+  try {
+    prepare_map(g, o);
+    ADD_FAILURE() << "13 agents on 12 cells accepted";
+  } catch (const ParamError& e) {
+    EXPECT_TRUE(contains(e.what(), "agents must be in [1, 12]"));
+  }
+  o.agents = 4;
+  o.given.set("lg-windwo", "3");
+  try {
+    prepare_map(g, o);
+    ADD_FAILURE() << "an unknown parameter accepted";
+  } catch (const ParamError& e) {
+    EXPECT_TRUE(contains(e.what(), "lg-windwo"));
+  }
+}
