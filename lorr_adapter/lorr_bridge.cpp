@@ -242,7 +242,7 @@ BridgeOptions with_prep(BridgeOptions o, const Grid& grid, int n) {
     po.dist_budget_mb = o.dist_budget_mb;
     const double per_step = po.step_budget_s * 2;  // a step's time with the work around the budget
     const double room = o.preprocess_s > 0 ? o.preprocess_s / 3 : 600;
-    po.steps = std::max(20, std::min(po.steps, int(room / (per_step * po.traffic_costs.size()))));
+    po.steps = std::max(20, std::min(po.steps, int(room / (per_step * po.seeds * po.traffic_costs.size()))));
     prep = prepare_map(grid, po);
     try {
       save_prep(prep, path);

@@ -54,8 +54,9 @@ const char* kUsage =
     "  --list-params       print the planner's parameters with the values in force for --map and\n"
     "                      --agents (or --lorr-problem), then exit\n"
     "  --prepare FILE      offline preparation (rotation model): simulate --steps steps (300 is\n"
-    "                      enough) per candidate traffic cost with --agents on --map, random goals,\n"
-    "                      write the choice to FILE (map_prep.hpp), then exit\n"
+    "                      enough) per candidate traffic cost and seed (--seed, --seed + 1) with\n"
+    "                      --agents on --map, random goals; write the choice to FILE\n"
+    "                      (map_prep.hpp), then exit\n"
     "  --prep FILE         use a preparation file made for this map, fleet size and model: its\n"
     "                      traffic cost applies unless --traffic-cost is given\n"
     "  --PARAM VALUE       a planner parameter; each planner's are listed below\n";
@@ -263,8 +264,8 @@ int prepare(const RunOptions& o, const Grid& grid, const Params& args, const Fla
   save_prep(prep, o.prepare_path);
   if (!flags.quiet)
     for (auto& t : prep.trials)
-      std::fprintf(stderr, "traffic-cost %g: %ld goals in %d steps (%.1f s)\n", t.traffic_cost, t.goals, prep.steps,
-                   t.seconds);
+      std::fprintf(stderr, "traffic-cost %g, seed %llu: %ld goals in %d steps (%.1f s)\n", t.traffic_cost,
+                   static_cast<unsigned long long>(t.seed), t.goals, prep.steps, t.seconds);
   std::printf("%s: traffic-cost %g\n", o.prepare_path.c_str(), prep.traffic_cost);
   return 0;
 }

@@ -20,7 +20,7 @@ std::string number(double x) {
   return buf;
 }
 
-PrepTrial run_trial(const Grid& grid, const PrepOptions& o, double traffic_cost) {
+PrepTrial run_trial(const Grid& grid, const PrepOptions& o, double traffic_cost, uint64_t seed) {
   Params given = o.given;
   given.set("traffic-cost", number(traffic_cost));
   if (o.step_budget_s > 0 && planner_has_param(o.planner, "step-budget") && !given.has("step-budget"))
@@ -28,15 +28,15 @@ PrepTrial run_trial(const Grid& grid, const PrepOptions& o, double traffic_cost)
   const PlannerParams values = PlannerParams::resolve(o.planner, given, MapFacts(grid, o.agents, o.model));
   given.check_all_used("preparation: planner " + o.planner);
   const DistTable dist(grid, o.model, size_t(o.dist_budget_mb) << 20, step_costs(values, o.model));
-  RandomNavigationStream tasks(grid, o.seed);
-  const auto planner = make_planner(values, grid, o.agents, o.seed, o.model);
+  RandomNavigationStream tasks(grid, seed);
+  const auto planner = make_planner(values, grid, o.agents, seed, o.model);
   SimOptions sim;
   sim.steps = o.steps;
   sim.action_model = o.model;
   const auto start = std::chrono::steady_clock::now();
-  const SimResult r = run_simulation(grid, dist, tasks, *planner, random_starts(grid, o.agents, o.seed), sim);
+  const SimResult r = run_simulation(grid, dist, tasks, *planner, random_starts(grid, o.agents, seed), sim);
   const std::chrono::duration<double> took = std::chrono::steady_clock::now() - start;
-  return {traffic_cost, r.goals_reached, took.count()};
+  return {traffic_cost, seed, r.goals_reached, took.count()};
 }
 
 }  // namespace
@@ -61,26 +61,41 @@ MapPrep prepare_map(const Grid& grid, const PrepOptions& o) {
     throw ParamError("offline preparation: agents must be in [1, " + std::to_string(grid.free_cells().size()) +
                      "], not " + std::to_string(o.agents));
   if (o.steps < 1) throw ParamError("offline preparation: steps must be >= 1");
+  if (o.seeds < 1) throw ParamError("offline preparation: seeds must be >= 1");
   if (o.traffic_costs.empty()) throw ParamError("offline preparation: no candidate traffic cost");
   MapPrep p;
   p.map_key = map_key(grid);
   p.width = grid.width(), p.height = grid.height(), p.agents = o.agents;
   p.model = o.model, p.planner = o.planner, p.steps = o.steps, p.step_budget_s = o.step_budget_s, p.seed = o.seed;
-  for (double k : o.traffic_costs) p.trials.push_back(run_trial(grid, o, k));
-  const PrepTrial* best = &p.trials.front();
-  for (const PrepTrial& t : p.trials)
-    if (t.goals > best->goals && t.goals > (1 + MapPrep::kMargin) * p.trials.front().goals) best = &t;
-  p.traffic_cost = best->traffic_cost;
+  p.seeds = o.seeds;
+  const bool crowded = crowded_fleet(MapFacts(grid, o.agents, o.model));
+  const std::vector<double> candidates =
+      crowded ? std::vector<double>{o.traffic_costs.front()} : o.traffic_costs;
+  for (double k : candidates)
+    for (int s = 0; s < o.seeds; ++s) p.trials.push_back(run_trial(grid, o, k, o.seed + uint64_t(s)));
+  const long first = p.goals_of(candidates.front());
+  p.traffic_cost = candidates.front();
+  for (double k : candidates)
+    if (p.goals_of(k) > p.goals_of(p.traffic_cost) && p.goals_of(k) > (1 + MapPrep::kMargin) * first)
+      p.traffic_cost = k;
   return p;
+}
+
+long MapPrep::goals_of(double k) const {
+  long goals = 0;
+  for (auto& t : trials) goals += t.traffic_cost == k ? t.goals : 0;
+  return goals;
 }
 
 nlohmann::json MapPrep::to_json() const {
   nlohmann::json trials = nlohmann::json::array();
-  for (auto& t : this->trials) trials.push_back({{"traffic_cost", t.traffic_cost}, {"goals", t.goals}, {"seconds", t.seconds}});
+  for (auto& t : this->trials)
+    trials.push_back({{"traffic_cost", t.traffic_cost}, {"seed", t.seed}, {"goals", t.goals}, {"seconds", t.seconds}});
   return {{"format", kFormat}, {"map_key", map_key},   {"width", width},
           {"height", height},  {"agents", agents},     {"action_model", action_model_name(model)},
           {"planner", planner}, {"steps", steps},      {"step_budget_s", step_budget_s},
-          {"seed", seed},      {"trials", trials},     {"traffic_cost", traffic_cost}};
+          {"seed", seed},      {"seeds", seeds},       {"trials", trials},
+          {"traffic_cost", traffic_cost}};
 }
 
 int MapPrep::apply(Params& given) const {
@@ -106,8 +121,9 @@ MapPrep load_prep(const std::string& path, const Grid& grid, int agents, ActionM
     p.width = j.at("width"), p.height = j.at("height"), p.agents = j.at("agents");
     p.model = parse_action_model(j.at("action_model").get<std::string>());
     p.planner = j.at("planner").get<std::string>();
-    p.steps = j.at("steps"), p.step_budget_s = j.at("step_budget_s"), p.seed = j.at("seed");
-    for (auto& t : j.at("trials")) p.trials.push_back({t.at("traffic_cost"), t.at("goals"), t.at("seconds")});
+    p.steps = j.at("steps"), p.step_budget_s = j.at("step_budget_s"), p.seed = j.at("seed"), p.seeds = j.at("seeds");
+    for (auto& t : j.at("trials"))
+      p.trials.push_back({t.at("traffic_cost"), t.at("seed"), t.at("goals"), t.at("seconds")});
     p.traffic_cost = j.at("traffic_cost");
   } catch (const std::exception& e) {
     throw PrepError("preparation file " + path + ": " + e.what());

@@ -19,6 +19,10 @@ double MapFacts::cut_cell_share() const {
   return *cut_share_;
 }
 
+// Fleets filling more than 90% of the free cells (rule crowded-fleet).
+constexpr double kCrowdedFleet = 0.9;
+bool crowded_fleet(const MapFacts& f) { return f.fleet_share() > kCrowdedFleet; }
+
 double MapFacts::fleet_share() const {
   return double(num_agents_) / std::max<size_t>(1, grid_->free_cells().size());
 }
@@ -46,9 +50,8 @@ std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerPa
 }
 // Fleets filling more than 90% of the free cells: guidance paths cannot be kept, PIBT alone moves,
 // and no agent retreats to let another pass (the rotation model's swap, after 20 steps standing).
-constexpr double kCrowdedFleet = 0.9;
 std::string rule_crowded(const std::string& param, const MapFacts& f, const PlannerParams&) {
-  const bool crowded = f.fleet_share() > kCrowdedFleet;
+  const bool crowded = crowded_fleet(f);
   if (param == "rotation-swap-wait") return crowded ? "0" : "20";
   return crowded ? "none" : "local";
 }

@@ -43,13 +43,16 @@ TEST(MapPrep, TrialsPickTheCostThatReachesMostGoalsAndTheFileRoundTrips) {
   o.steps = 60;
   o.step_budget_s = 0;  // deterministic
   const MapPrep p = prepare_map(g, o);
-  ASSERT_EQ(p.trials.size(), 2u);
+  ASSERT_EQ(p.trials.size(), 4u);  // 2 candidates x 2 seeds
   for (auto& t : p.trials) EXPECT_GT(t.goals, 0);
-  const PrepTrial& none = p.trials[0];
-  const PrepTrial& two = p.trials[1];
-  const bool switch_to_two = two.goals > none.goals && two.goals > (1 + MapPrep::kMargin) * none.goals;
+  EXPECT_EQ(p.trials[1].seed, o.seed + 1);
+  const long none = p.trials[0].goals + p.trials[1].goals, two = p.trials[2].goals + p.trials[3].goals;
+  EXPECT_EQ(p.goals_of(0), none);
+  EXPECT_EQ(p.goals_of(2), two);
+  EXPECT_NE(p.trials[0].goals, p.trials[1].goals);  // two seeds, two runs
+  const bool switch_to_two = two > none && two > (1 + MapPrep::kMargin) * none;
   EXPECT_EQ(p.traffic_cost, switch_to_two ? 2.0 : 0.0);
-  EXPECT_EQ(prepare_map(g, o).trials[1].goals, two.goals);  // a seed fixes the trials
+  EXPECT_EQ(prepare_map(g, o).trials[3].goals, p.trials[3].goals);  // a seed fixes the trials
 
   const std::string path = testing::TempDir() + "/prep_roundtrip.json";
   save_prep(p, path);
@@ -78,6 +81,20 @@ TEST(MapPrep, TrialsPickTheCostThatReachesMostGoalsAndTheFileRoundTrips) {
   std::ofstream(path) << bad.dump();
   EXPECT_TRUE(contains(refusal(path, g, 60, ActionModel::kRotation), "traffic_cost 50 is not in [0, 8]"));
   std::remove(path.c_str());
+}
+
+// A crowded fleet (rule crowded-fleet: more than 90% of the free cells) keeps the first candidate:
+// it is the only one tried.
+TEST(MapPrep, ACrowdedFleetTriesOnlyTheFirstCandidate) {
+  const Grid g = Grid::from_rows({".....", ".....", "....."});
+  PrepOptions o;
+  o.agents = 14;
+  o.steps = 10;
+  o.step_budget_s = 0;
+  const MapPrep p = prepare_map(g, o);
+  ASSERT_EQ(p.trials.size(), 2u);
+  for (auto& t : p.trials) EXPECT_EQ(t.traffic_cost, 0.0);
+  EXPECT_EQ(p.traffic_cost, 0.0);
 }
 
 TEST(MapPrep, BadOptionsAreErrorsNamingThem) {

@@ -6,8 +6,10 @@
 // every route needs, the same cost loses a third; no single structural measure told them apart.
 // So, as the guidance-graph optimisation of Zhang et al. (IJCAI 2024) does with a simulator in
 // the loop, preparation runs the planner on the map itself, with the fleet's size and random
-// goals, once per candidate cost, and keeps the one that reaches the most goals. The first
-// candidate (none) is kept unless another beats it by kMargin, so noise does not switch it.
+// goals, once per candidate cost and seed, and keeps the one that reaches the most goals over the
+// seeds. The first candidate (none) is kept unless another beats it by kMargin, so noise does not
+// switch it; and it is the only one for a crowded fleet (rule crowded-fleet, planner_params.hpp),
+// where agents have no room to route around anything and short trials are noise.
 // The League's Start-Kit gives a preprocessing phase for such work (the LoRR adapter runs it
 // there, lorr_bridge.hpp); the ROS node and gdrhcr_sim load a file made by `gdrhcr_prep`.
 //
@@ -43,6 +45,7 @@ struct PrepOptions {
   Params given;                               // the planner's parameters besides the tuned ones
   std::vector<double> traffic_costs{0, 2};    // candidates; the first is the fallback
   int steps = 300;                            // per trial
+  int seeds = 2;                              // trials per candidate: seeds seed, seed + 1, ...
   double step_budget_s = 0.05;                // the planner's step budget in trials (0 = none)
   uint64_t seed = 1;
   int dist_budget_mb = 1024;                  // the trials' distance-table cache
@@ -50,13 +53,14 @@ struct PrepOptions {
 
 struct PrepTrial {
   double traffic_cost = 0;
+  uint64_t seed = 0;
   long goals = 0;
   double seconds = 0;
 };
 
 struct MapPrep {
   static constexpr const char* kFormat = "gdrhcr-prep/1";
-  static constexpr double kMargin = 0.03;  // a candidate replaces the first one if 3% better
+  static constexpr double kMargin = 0.05;  // a candidate replaces the first one if 5% better
   std::string map_key;
   int width = 0, height = 0, agents = 0;
   ActionModel model = ActionModel::kRotation;
@@ -64,8 +68,10 @@ struct MapPrep {
   int steps = 0;
   double step_budget_s = 0;
   uint64_t seed = 0;
+  int seeds = 0;
   std::vector<PrepTrial> trials;
   double traffic_cost = 0;  // the choice
+  long goals_of(double traffic_cost) const;  // over the seeds
 
   nlohmann::json to_json() const;
   // Sets the prepared parameters in `given` unless they are given already; returns how many.

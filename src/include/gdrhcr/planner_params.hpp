@@ -52,6 +52,9 @@ class MapFacts {
 
 class PlannerParams;
 
+// Rule crowded-fleet's test: the fleet holds more than 90% of the free cells.
+bool crowded_fleet(const MapFacts& facts);
+
 // A named rule picking the default of one or more parameters from the map, the fleet and the
 // values resolved before them (table order).
 struct ParamRule {
