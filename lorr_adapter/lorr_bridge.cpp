@@ -217,8 +217,10 @@ struct Bridge::Impl {
 
 namespace {
 
+constexpr double kPrepMaxSeconds = 600;
+
 // The offline preparation for this map and fleet (GDRHCR_PREP_DIR): loaded from its cache file,
-// or made within a third of the preprocessing limit and cached. Its traffic cost joins the
+// or made within a third of the preprocessing limit (at most 10 minutes) and cached. Its traffic cost joins the
 // planner's parameters unless they set one. Optional: a failure is reported and the run goes on.
 BridgeOptions with_prep(BridgeOptions o, const Grid& grid, int n) {
   if (o.prep_dir.empty() || !planner_has_param(o.planner, "traffic-cost")) return o;
@@ -240,9 +242,7 @@ BridgeOptions with_prep(BridgeOptions o, const Grid& grid, int n) {
     for (auto& [k, v] : o.params) po.given.set(k, v);
     po.seed = o.seed;
     po.dist_budget_mb = o.dist_budget_mb;
-    const double per_step = po.step_budget_s * 2;  // a step's time with the work around the budget
-    const double room = o.preprocess_s > 0 ? o.preprocess_s / 3 : 600;
-    po.steps = std::max(20, std::min(po.steps, int(room / (per_step * po.seeds * po.traffic_costs.size()))));
+    po.time_limit_s = o.preprocess_s > 0 ? std::min(o.preprocess_s / 3, kPrepMaxSeconds) : kPrepMaxSeconds;
     prep = prepare_map(grid, po);
     try {
       save_prep(prep, path);

@@ -53,7 +53,7 @@ const char* kUsage =
     "  --quiet             no summary on standard error\n"
     "  --list-params       print the planner's parameters with the values in force for --map and\n"
     "                      --agents (or --lorr-problem), then exit\n"
-    "  --prepare FILE      offline preparation (rotation model): simulate --steps steps (300 is\n"
+    "  --prepare FILE      offline preparation (rotation model): simulate --steps steps (600 is\n"
     "                      enough) per candidate traffic cost and seed (--seed, --seed + 1) with\n"
     "                      --agents on --map, random goals; write the choice to FILE\n"
     "                      (map_prep.hpp), then exit\n"

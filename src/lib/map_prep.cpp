@@ -1,5 +1,6 @@
 #include "gdrhcr/map_prep.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -20,7 +21,9 @@ std::string number(double x) {
   return buf;
 }
 
-PrepTrial run_trial(const Grid& grid, const PrepOptions& o, double traffic_cost, uint64_t seed) {
+// One trial of `steps` steps, cut short at wall_limit_s (> 0); PrepTrial::steps says how many ran.
+PrepTrial run_trial(const Grid& grid, const PrepOptions& o, double traffic_cost, uint64_t seed, int steps,
+                    double wall_limit_s = 0) {
   Params given = o.given;
   given.set("traffic-cost", number(traffic_cost));
   if (o.step_budget_s > 0 && planner_has_param(o.planner, "step-budget") && !given.has("step-budget"))
@@ -31,12 +34,14 @@ PrepTrial run_trial(const Grid& grid, const PrepOptions& o, double traffic_cost,
   RandomNavigationStream tasks(grid, seed);
   const auto planner = make_planner(values, grid, o.agents, seed, o.model);
   SimOptions sim;
-  sim.steps = o.steps;
+  sim.steps = steps;
   sim.action_model = o.model;
+  sim.wall_limit_s = wall_limit_s;
+  sim.free_flow = false;
   const auto start = std::chrono::steady_clock::now();
   const SimResult r = run_simulation(grid, dist, tasks, *planner, random_starts(grid, o.agents, seed), sim);
   const std::chrono::duration<double> took = std::chrono::steady_clock::now() - start;
-  return {traffic_cost, seed, r.goals_reached, took.count()};
+  return {traffic_cost, seed, r.goals_reached, took.count(), r.steps};
 }
 
 }  // namespace
@@ -66,13 +71,18 @@ MapPrep prepare_map(const Grid& grid, const PrepOptions& o) {
   MapPrep p;
   p.map_key = map_key(grid);
   p.width = grid.width(), p.height = grid.height(), p.agents = o.agents;
-  p.model = o.model, p.planner = o.planner, p.steps = o.steps, p.step_budget_s = o.step_budget_s, p.seed = o.seed;
+  p.model = o.model, p.planner = o.planner, p.step_budget_s = o.step_budget_s, p.seed = o.seed;
   p.seeds = o.seeds;
   const bool crowded = crowded_fleet(MapFacts(grid, o.agents, o.model));
   const std::vector<double> candidates =
       crowded ? std::vector<double>{o.traffic_costs.front()} : o.traffic_costs;
-  for (double k : candidates)
-    for (int s = 0; s < o.seeds; ++s) p.trials.push_back(run_trial(grid, o, k, o.seed + uint64_t(s)));
+  // With a time limit the first trial runs for its share of it, and the others as many steps.
+  const double share = o.time_limit_s > 0 ? o.time_limit_s / (double(candidates.size()) * o.seeds) : 0;
+  p.trials.push_back(run_trial(grid, o, candidates.front(), o.seed, o.steps, share));
+  p.steps = std::max(1, p.trials.front().steps);
+  for (size_t c = 0; c < candidates.size(); ++c)
+    for (int s = 0; s < o.seeds; ++s)
+      if (c > 0 || s > 0) p.trials.push_back(run_trial(grid, o, candidates[c], o.seed + uint64_t(s), p.steps));
   const long first = p.goals_of(candidates.front());
   p.traffic_cost = candidates.front();
   for (double k : candidates)
@@ -123,7 +133,7 @@ MapPrep load_prep(const std::string& path, const Grid& grid, int agents, ActionM
     p.planner = j.at("planner").get<std::string>();
     p.steps = j.at("steps"), p.step_budget_s = j.at("step_budget_s"), p.seed = j.at("seed"), p.seeds = j.at("seeds");
     for (auto& t : j.at("trials"))
-      p.trials.push_back({t.at("traffic_cost"), t.at("seed"), t.at("goals"), t.at("seconds")});
+      p.trials.push_back({t.at("traffic_cost"), t.at("seed"), t.at("goals"), t.at("seconds"), p.steps});
     p.traffic_cost = j.at("traffic_cost");
   } catch (const std::exception& e) {
     throw PrepError("preparation file " + path + ": " + e.what());

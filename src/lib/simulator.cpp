@@ -74,16 +74,20 @@ class Run {
   }
 
   SimResult run(const std::vector<Cell>& starts, Clock::time_point t_start) {
-    for (int t = 0; t < opt_.steps; ++t) {
-      plan(t);
-      advance(t);
+    int steps = 0;
+    for (; steps < opt_.steps; ++steps) {
+      if (steps > 0 && opt_.wall_limit_s > 0 && seconds_since(t_start) > opt_.wall_limit_s) break;
+      plan(steps);
+      advance(steps);
     }
-    r_.throughput = opt_.steps > 0 ? double(r_.goals_reached) / opt_.steps : 0;
+    r_.steps = steps;
+    r_.throughput = steps > 0 ? double(r_.goals_reached) / steps : 0;
     r_.plan_time_mean_s = r_.planned_steps ? plan_sum_ / r_.planned_steps : 0;
-    r_.step_wall_mean_s = opt_.steps > 0 ? wall_sum_ / opt_.steps : 0;
-    r_.step_cpu_mean_s = opt_.steps > 0 ? cpu_sum_ / opt_.steps : 0;
+    r_.step_wall_mean_s = steps > 0 ? wall_sum_ / steps : 0;
+    r_.step_cpu_mean_s = steps > 0 ? cpu_sum_ / steps : 0;
     for (int i = 0; i < n_; ++i) r_.late_at_end += late_[i];
-    r_.free_flow_throughput = free_flow_throughput(grid_, dist_, tasks_, starts, opt_.steps, &start_head_);
+    if (opt_.free_flow)
+      r_.free_flow_throughput = free_flow_throughput(grid_, dist_, tasks_, starts, steps, &start_head_);
     r_.wall_time_s = seconds_since(t_start);
     return std::move(r_);
   }
@@ -229,6 +233,10 @@ int walk_to_goal(const Grid& grid, const DistRow& row, Pose& p) {
 double free_flow_throughput(const Grid& grid, const DistTable& dist, const TaskStream& tasks,
                             const std::vector<Cell>& starts, int steps, const std::vector<Heading>* start_headings) {
   if (steps <= 0) return 0;
+  if (dist.step_costs().any()) {  // the bound is over true shortest paths: every step costs 1
+    const DistTable unit(grid, dist.action_model(), dist.budget_bytes());
+    return free_flow_throughput(grid, unit, tasks, starts, steps, start_headings);
+  }
   const bool rotation = dist.action_model() == ActionModel::kRotation;
   auto replay = tasks.clone_fresh();
   long reached = 0;

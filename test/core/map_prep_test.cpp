@@ -97,6 +97,22 @@ TEST(MapPrep, ACrowdedFleetTriesOnlyTheFirstCandidate) {
   EXPECT_EQ(p.traffic_cost, 0.0);
 }
 
+// With a time limit the first trial stops at its share of it (here after its first step) and
+// the others run as many steps.
+TEST(MapPrep, ATimeLimitShortensTheTrials) {
+  const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+  PrepOptions o;
+  o.agents = 20;
+  o.steps = 400;
+  o.time_limit_s = 1e-9;
+  const MapPrep p = prepare_map(g, o);
+  EXPECT_EQ(p.steps, 1);
+  ASSERT_EQ(p.trials.size(), 4u);
+  for (auto& t : p.trials) EXPECT_EQ(t.steps, 1);
+  o.time_limit_s = 1e6;
+  EXPECT_EQ(prepare_map(g, o).steps, 400);
+}
+
 TEST(MapPrep, BadOptionsAreErrorsNamingThem) {
   const Grid g = Grid::from_rows({"....", "....", "...."});
   PrepOptions o;

@@ -44,9 +44,12 @@ struct PrepOptions {
   std::string planner = "gd-rhcr";
   Params given;                               // the planner's parameters besides the tuned ones
   std::vector<double> traffic_costs{0, 2};    // candidates; the first is the fallback
-  int steps = 300;                            // per trial
+  int steps = 600;                            // per trial
   int seeds = 2;                              // trials per candidate: seeds seed, seed + 1, ...
-  double step_budget_s = 0.05;                // the planner's step budget in trials (0 = none)
+  double step_budget_s = 0;                   // the planner's step budget in trials (0 = none:
+                                              //   trials then repeat exactly, whatever the load)
+  double time_limit_s = 0;                    // > 0: the first trial stops at its share of it,
+                                              //   and the others run as many steps
   uint64_t seed = 1;
   int dist_budget_mb = 1024;                  // the trials' distance-table cache
 };
@@ -56,6 +59,7 @@ struct PrepTrial {
   uint64_t seed = 0;
   long goals = 0;
   double seconds = 0;
+  int steps = 0;
 };
 
 struct MapPrep {

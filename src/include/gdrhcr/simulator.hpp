@@ -25,6 +25,10 @@ struct SimOptions {
   ActionModel action_model = ActionModel::kMapf;
   // Rotation: each agent's heading at the start; empty = all east (kEast), as in the Start-Kit.
   std::vector<Heading> start_headings;
+  // > 0: no step after the first starts after this much wall time (SimResult::steps says how
+  // many ran).
+  double wall_limit_s = 0;
+  bool free_flow = true;  // compute SimResult::free_flow_throughput (a distance row per goal)
 };
 
 struct SimResult {
@@ -61,7 +65,8 @@ SimResult run_simulation(const Grid& grid, const DistTable& dist, TaskStream& ta
 // the physical upper bound a planner is compared against. With a rotation DistTable the paths
 // are over (cell, heading) states, so turns count: each agent starts with start_headings (empty
 // or null: east) and arrives at each goal with the heading of its shortest path (forward
-// preferred over a turn among equally short actions).
+// preferred over a turn among equally short actions). Step costs (lanes, traffic) do not count:
+// the paths are the shortest in steps.
 double free_flow_throughput(const Grid& grid, const DistTable& dist, const TaskStream& tasks,
                             const std::vector<Cell>& starts, int steps,
                             const std::vector<Heading>* start_headings = nullptr);
