@@ -14,11 +14,14 @@ plots errands against the budget (matplotlib; without it the plot is skipped, wi
 
 STEPS: --steps, else the main round's own length for the instances it knows (MR23-I-03 500, ...).
 Our planner's settings come from the environment as for bench_lorr.sh (GDRHCR_PLANNER,
-GDRHCR_PARAMS, GDRHCR_TURNS, GDRHCR_SEED).
+GDRHCR_PARAMS, GDRHCR_TURNS, GDRHCR_SEED). The offline preparation (GDRHCR_PREP_DIR, made in the
+first run's preprocessing phase and loaded by the later ones) is cached in --prep-dir (default
+build/lorr/prep; "none": no preparation).
 """
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -60,7 +63,9 @@ def run_one(kit, instance, steps, budget, out_dir):
     with open(out[: -len(".json")] + ".times") as f:
         ours = [float(x) for x in f.read().split()]
     kit_ms = [1000 * t for t in r.get("plannerTimes", [])]
+    prep = re.search(r"traffic-cost (\S+) from the preparation", proc.stderr)
     return {
+        "prep_traffic_cost": float(prep.group(1)) if prep else None,
         "instance": name, "steps": steps, "budget_ms": budget, "errands": r["numTaskFinished"],
         "all_valid": r["AllValid"], "errors": len(r.get("errors", [])),
         "ms_mean": sum(ours) / len(ours) if ours else float("nan"), "ms_p99": percentile(ours, 0.99),
@@ -102,6 +107,8 @@ def main(argv=None):
     ap.add_argument("--out-dir", default=os.path.join(TOP, "results", "lorr"), help="the Start-Kit outputs")
     ap.add_argument("--json", help="write every row here")
     ap.add_argument("--plot", help="errands / best-known against the budget, PNG")
+    ap.add_argument("--prep-dir", default=os.path.join(TOP, "build", "lorr", "prep"),
+                    help="the offline preparation's cache (GDRHCR_PREP_DIR); none = no preparation")
     a = ap.parse_args(argv)
     if not a.start_kit or not os.path.isfile(os.path.join(a.start_kit, "src", "driver.cpp")):
         ap.error(f"--start-kit {a.start_kit} is not a LoRR Start-Kit (no src/driver.cpp)")
@@ -110,6 +117,9 @@ def main(argv=None):
     if a.steps is not None and a.steps < 1:
         ap.error("--steps must be at least 1")
     os.makedirs(a.out_dir, exist_ok=True)
+    if a.prep_dir != "none":
+        os.makedirs(a.prep_dir, exist_ok=True)
+        os.environ["GDRHCR_PREP_DIR"] = os.path.abspath(a.prep_dir)
     rows = []
     print(f"{'instance':<12} {'steps':>5} {'budget ms':>9} {'errands':>8} {'best-known':>10} {'share':>6} "
           f"{'valid':>5} {'mean ms':>8} {'p99 ms':>7} {'max ms':>7}")
@@ -134,7 +144,8 @@ def main(argv=None):
         os.makedirs(os.path.dirname(os.path.abspath(a.json)), exist_ok=True)
         with open(a.json, "w") as f:
             json.dump({"rows": rows, "planner": os.environ.get("GDRHCR_PLANNER", "gd-rhcr"),
-                       "params": os.environ.get("GDRHCR_PARAMS", "")}, f, indent=1)
+                       "params": os.environ.get("GDRHCR_PARAMS", ""),
+                       "prep_dir": os.environ.get("GDRHCR_PREP_DIR", "")}, f, indent=1)
     if a.plot:
         plot(rows, a.plot)
     invalid = [r for r in rows if r["all_valid"] != "Yes" or r["errors"]]

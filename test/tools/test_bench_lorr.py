@@ -31,8 +31,10 @@ class BenchLorrTest(unittest.TestCase):
         with tempfile.TemporaryDirectory() as tmp:
             out_json, png = os.path.join(tmp, "curve.json"), os.path.join(tmp, "curve.png")
             with contextlib.redirect_stdout(io.StringIO()) as printed:
+                self.addCleanup(os.environ.pop, "GDRHCR_PREP_DIR", None)
                 rc = bench_lorr.main(["--start-kit", self.kit, "--steps", "20", "--budgets", "50",
-                                      "--out-dir", tmp, "--json", out_json, "--plot", png, SMALL])
+                                      "--out-dir", tmp, "--json", out_json, "--plot", png,
+                                      "--prep-dir", os.path.join(tmp, "prep"), SMALL])
             self.assertEqual(rc, 0, printed.getvalue())
             rows = read_json(out_json)["rows"]
             self.assertEqual(len(rows), 1)
@@ -48,6 +50,9 @@ class BenchLorrTest(unittest.TestCase):
             self.assertLessEqual(row["ms_p99"], 50)
             self.assertIn("small", printed.getvalue())
             self.assertTrue(os.path.getsize(png) > 0)
+            # The offline preparation was made in the run's preprocessing and cached.
+            self.assertIn(row["prep_traffic_cost"], (0.0, 2.0))
+            self.assertEqual(len([f for f in os.listdir(os.path.join(tmp, "prep")) if f.startswith("gdrhcr-prep-")]), 1)
 
     def test_bad_arguments_are_named(self):
         for args, word in ((["--budgets", "0", SMALL], "--budgets"), (["--steps", "0", SMALL], "--steps"),
