@@ -31,6 +31,7 @@
 #include "gd_rhcr_planner/map_loader.hpp"
 #include "gdrhcr/params.hpp"
 #include "gdrhcr/planner.hpp"
+#include "gdrhcr/planner_params.hpp"
 
 using namespace gd_rhcr_planner;
 
@@ -124,13 +125,15 @@ void account(const Executor& ex, DelayedFleet& fleet, const gdrhcr::Grid& g, Res
 }
 
 Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t seed) {
-  gdrhcr::DistTable dist(g);
   gdrhcr::Params params, none;
   // Node-budget mode: the same plans on any machine (no timeouts).
   if (o.planner == "gd-rhcr") params.set("timeout", "1e6"), params.set("node-budget", "2000");
   for (const auto& [k, v] : o.params) params.set(k, v);
-  auto primary = gdrhcr::make_planner(o.planner, params, g, o.robots, seed);
+  const auto values = gdrhcr::PlannerParams::resolve(o.planner, params, gdrhcr::MapFacts(g, o.robots));
   params.check_all_used(o.planner);  // a misspelt --param is an error, not ignored
+  const gdrhcr::DistTable dist(g, gdrhcr::ActionModel::kMapf, gdrhcr::DistTable::kDefaultBudgetBytes,
+                               gdrhcr::step_costs(values, gdrhcr::ActionModel::kMapf));
+  auto primary = gdrhcr::make_planner(values, g, o.robots, seed);
   DeadlinePlanner planner(std::move(primary), gdrhcr::make_planner("pibt", none, g, o.robots, seed));
   ExecutorConfig cfg;
   cfg.commit_horizon = o.commit_horizon;

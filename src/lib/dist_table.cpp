@@ -39,8 +39,10 @@ FreeCellIndex::FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked_
     for (Cell c : blocked_cells)
       if (grid.is_free(c)) blocked[slot_of[c]] = 1;
   }
-  width = grid.width();
   if (costs.any()) {
+    // The rotation model only: the mapf model's SIPP runs out of memory on costed rows.
+    if (model != ActionModel::kRotation)
+      throw std::invalid_argument("traffic-cost and lane-cost apply to the rotation model only");
     cost.assign(size_t(num_free) * kNumHeadings, 1);
     if (costs.traffic > 0) add_traffic_cost(costs.traffic);
     if (costs.lane > 0) add_lane_cost(grid, costs.lane);
@@ -95,11 +97,6 @@ void FreeCellIndex::add_lane_cost(const Grid& grid, double extra) {
   for (int32_t s = 0; s < num_free; ++s)
     for (Heading h = 0; h < kNumHeadings; ++h)
       if (lanes.against(grid, cell_of[s], h)) raise_cost(s, h, std::lround(extra));
-}
-
-Heading FreeCellIndex::heading_between(int32_t from, int32_t to) const {
-  const Cell d = cell_of[to] - cell_of[from];
-  return d == 1 ? kEast : d == -1 ? kWest : d > 0 ? kSouth : kNorth;
 }
 
 void FreeCellIndex::raise_cost(int32_t slot, int heading, long extra) {
@@ -160,7 +157,6 @@ void DistRow::bfs() {
   const int32_t goal_slot = ix.slot_of.at(goal_);
   if (goal_slot >= ix.num_free) throw std::out_of_range("distance row: goal is not a free cell");
   if (ix.model == ActionModel::kRotation) return bfs_rotation(goal_slot);
-  if (!ix.cost.empty()) return weighted_mapf(goal_slot);
   thread_local std::vector<int32_t> queue;
   if (narrow_) {
     d16_.assign(size_t(ix.num_free) + 1, 0xFFFF);
@@ -216,44 +212,6 @@ void DistRow::unit_rotation(int32_t goal_slot, std::vector<uint32_t>& d) {
     visit(s * 4 + ((h + 3) & 3), nd);
     const int32_t behind = faced[size_t(s) * 4 + ((h + 2) & 3)];
     if (behind < f && !(blocked && blocked[behind])) visit(behind * 4 + h, nd);
-  }
-}
-
-// The mapf model with step costs: Dial's algorithm over slots; a move from a neighbour n into
-// slot s costs ix.cost[4 s + the move's heading].
-void DistRow::weighted_mapf(int32_t goal_slot) {
-  const FreeCellIndex& ix = *index_;
-  const int32_t f = ix.num_free;
-  const uint8_t* blocked = ix.blocked.empty() ? nullptr : ix.blocked.data();
-  thread_local std::vector<uint32_t> d;
-  d.assign(size_t(f) + 1, UINT32_MAX);
-  const uint32_t buckets = static_cast<uint32_t>(ix.max_cost) + 1;
-  thread_local std::vector<std::vector<int32_t>> bucket;
-  bucket.resize(buckets);
-  for (auto& b : bucket) b.clear();
-  d[goal_slot] = 0;
-  bucket[0].push_back(goal_slot);
-  size_t pending = 1;
-  for (uint32_t dist = 0; pending > 0; ++dist) {
-    auto& b = bucket[dist % buckets];
-    for (size_t k = 0; k < b.size(); ++k) {
-      const int32_t s = b[k];
-      --pending;
-      if (d[s] != dist) continue;
-      for (int32_t a = ix.adj_begin[s]; a < ix.adj_begin[s + 1]; ++a) {
-        const int32_t n = ix.adj[a];
-        if (blocked && blocked[n]) continue;
-        const uint32_t nd = dist + ix.cost[size_t(s) * 4 + ix.heading_between(n, s)];
-        if (nd < d[n]) d[n] = nd, bucket[nd % buckets].push_back(n), ++pending;
-      }
-    }
-    b.clear();
-  }
-  if (narrow_) {
-    d16_.resize(size_t(f) + 1);
-    for (int32_t s = 0; s <= f; ++s) d16_[s] = d[s] == UINT32_MAX ? 0xFFFF : static_cast<uint16_t>(d[s]);
-  } else {
-    d32_ = d;
   }
 }
 

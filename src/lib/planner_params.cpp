@@ -381,10 +381,12 @@ std::string PlannerParams::format() const {
 
 StepCosts step_costs(const PlannerParams& values, ActionModel model) {
   StepCosts c;
-  c.traffic = values.has("traffic-cost") ? values.real("traffic-cost") : 0;
-  c.lane = values.has("lane-cost") ? values.real("lane-cost") : 0;
-  if (c.traffic > 0 && model != ActionModel::kRotation)
-    throw ParamError("parameter traffic-cost applies to the rotation model only (got " + fmt_number(c.traffic) + ")");
+  for (auto [name, value] : {std::pair{"traffic-cost", &c.traffic}, std::pair{"lane-cost", &c.lane}}) {
+    *value = values.has(name) ? values.real(name) : 0;
+    if (*value > 0 && model != ActionModel::kRotation)
+      throw ParamError(std::string("parameter ") + name + " applies to the rotation model only (got " +
+                       fmt_number(*value) + ")");
+  }
   return c;
 }
 

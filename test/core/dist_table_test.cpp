@@ -313,6 +313,8 @@ TEST(DistTable, TrafficCostIsHighestOnTheOnlyDoorAndRotationOnly) {
   EXPECT_EQ(door, 5);
   EXPECT_LT(into(g.cell(0, 0)), door);
   for (Heading h = 0; h < kNumHeadings; ++h) EXPECT_EQ(ix.cost[ix.slot_of[g.cell(4, 2)] * kNumHeadings + h], door);
+  EXPECT_THROW(FreeCellIndex(g, {}, ActionModel::kMapf, StepCosts{1.0, 0.0}), std::invalid_argument);
+  EXPECT_THROW(FreeCellIndex(g, {}, ActionModel::kMapf, StepCosts{0.0, 2.0}), std::invalid_argument);
   FreeCellIndex none(g, {}, ActionModel::kRotation, StepCosts{});
   EXPECT_TRUE(none.cost.empty());
   FreeCellIndex no_lanes(g, {}, ActionModel::kRotation, StepCosts{0.0, 2.0});  // no one-cell aisle
@@ -339,23 +341,4 @@ TEST(DistTable, LaneCostSendsTrafficAlongTheNextAisleTheOtherWay) {
   auto both = std::make_shared<const FreeCellIndex>(g, std::vector<Cell>{}, ActionModel::kRotation,
                                                     StepCosts{2.0, 2.0});
   expect_rows_shortest_under_costs(g, both, rng);
-  // The mapf model: no turns, so the way round is 2 + 11 + 2 moves; rows are shortest under the
-  // costs (a move from c into a neighbour n in heading h costs n's cost for h).
-  auto mapf = std::make_shared<const FreeCellIndex>(g, std::vector<Cell>{}, ActionModel::kMapf, StepCosts{0.0, 2.0});
-  EXPECT_EQ(DistRow(mapf, east)[west], 15);
-  EXPECT_EQ(DistRow(mapf, west)[east], 11);
-  for (int k = 0; k < 5; ++k) {
-    const Cell goal = g.free_cells()[rng() % g.free_cells().size()];
-    const DistRow row(mapf, goal);
-    for (Cell c : g.free_cells()) {
-      if (c == goal) {
-        EXPECT_EQ(row[c], 0);
-        continue;
-      }
-      int best = kUnreachable;
-      for (Cell n : g.neighbours(c))
-        best = std::min(best, mapf->cost[mapf->slot_of[n] * kNumHeadings + heading_of_move(g, c, n)] + row[n]);
-      EXPECT_EQ(row[c], best) << "cell " << c;
-    }
-  }
 }

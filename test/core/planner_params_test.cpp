@@ -122,7 +122,7 @@ TEST(PlannerParams, UnknownAndOutOfRangeParametersAreErrorsNamingThem) {
   EXPECT_NE(message("gd-rhcr", "swap", "2").find("swap must be in [0, 1]"), std::string::npos);
   EXPECT_NE(message("gd-rhcr", "preset", "fast").find("preset must be one of default, paper"), std::string::npos);
   EXPECT_NE(message("gd-rhcr", "lane-cost", "9").find("lane-cost must be in [0, 8]"), std::string::npos);
-  for (const char* cost : {"traffic-cost"}) {  // outside the rotation model
+  for (const char* cost : {"lane-cost", "traffic-cost"}) {  // step costs outside the rotation model
     Params p;
     p.set(cost, "1");
     const PlannerParams v = PlannerParams::resolve("gd-rhcr", p, MapFacts(g, 4));

@@ -27,7 +27,7 @@
 // 2 steps, so the excess is 0, 1 or 2). row[c] reads the least distance over c's headings,
 // row.at(c, h) the distance from heading h; in the mapf model both read the cell distance.
 //
-// Step costs (issue 24, congestion; off unless asked for). A move (in rotation: a forward move)
+// Step costs (issue 24, congestion; rotation model only; off unless asked for). A forward move
 // may cost more than 1, so rows are computed by Dial's algorithm; a turn still costs 1, so the
 // excess bits hold. Two costs add up:
 //   - traffic cost (after the traffic-flow costs of Chen et al., AAAI 2024): a move into a cell
@@ -78,22 +78,20 @@ struct FreeCellIndex {
   std::vector<int32_t> adj;           //   adj[adj_begin[s] .. adj_begin[s+1])
   std::vector<uint8_t> blocked;       // per slot; empty when nothing is blocked
   std::vector<int32_t> faced;         // rotation: 4 per slot, the slot heading h faces, or num_free
-  std::vector<uint8_t> cost;          // with step costs: per slot s and heading h (4 s + h), a move
-                                      //   into s in heading h (rotation: forward); else empty
+  std::vector<uint8_t> cost;          // rotation with step costs: per slot s and heading h (4 s + h),
+                                      //   a forward move into s in heading h; else empty
   int32_t max_cost = 1;               // the largest step cost
   static constexpr int kTrafficRoots = 64;
   static constexpr double kTrafficPercentile = 0.99;
   void add_traffic_cost(double strength);
   void add_lane_cost(const Grid& grid, double extra);
   void raise_cost(int32_t slot, int heading, long extra);
-  int32_t width = 0;  // the grid's
-  Heading heading_between(int32_t from, int32_t to) const;  // of the move between neighbour slots
   // A shortest path over (cell, heading) states makes at most F - 1 moves, at most one turn
   // between two moves and two before the first, so its length is below 2F: rotation rows are
   // 16 bits up to half as many free cells.
   bool wide() const {
     return model == ActionModel::kRotation ? int64_t(num_free) * (max_cost + 1) > kMaxNarrowFree
-                                           : int64_t(num_free) * max_cost > kMaxNarrowFree;
+                                           : num_free > kMaxNarrowFree;
   }
   size_t bytes() const;
   // 16-bit rows hold distances 0..65,534 and 0xFFFF as the sentinel; a component of F free
@@ -138,7 +136,6 @@ class DistRow {
   // Distances to the goal per state (slot * 4 + heading) into d (all UINT32_MAX beforehand).
   void unit_rotation(int32_t goal_slot, std::vector<uint32_t>& d);
   void weighted_rotation(int32_t goal_slot, std::vector<uint32_t>& d);
-  void weighted_mapf(int32_t goal_slot);
   std::shared_ptr<const FreeCellIndex> index_;
   const int32_t* slot_of_;
   Cell goal_;
