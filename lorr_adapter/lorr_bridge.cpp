@@ -220,8 +220,9 @@ namespace {
 constexpr double kPrepMaxSeconds = 600;
 
 // The offline preparation for this map and fleet (GDRHCR_PREP_DIR): loaded from its cache file,
-// or made within a third of the preprocessing limit (at most 10 minutes) and cached. Its traffic cost joins the
-// planner's parameters unless they set one. Optional: a failure is reported and the run goes on.
+// or made within a third of the preprocessing limit (at most 10 minutes) and cached. Its traffic
+// cost joins the planner's parameters unless they set one. A file that cannot be written is
+// reported and the preparation is used all the same.
 BridgeOptions with_prep(BridgeOptions o, const Grid& grid, int n) {
   if (o.prep_dir.empty() || !planner_has_param(o.planner, "traffic-cost")) return o;
   for (auto& [k, v] : o.params)
