@@ -27,9 +27,9 @@ namespace gdrhcr_lorr {
 //   GDRHCR_PREP_DIR   offline preparation (gdrhcr/map_prep.hpp) cached in this directory: in the
 //                     Start-Kit's preprocessing phase the adapter loads the file for this map,
 //                     fleet size and model, or makes it (trials of at most a third of the
-//                     preprocessing limit, and 10 minutes) and writes it there; its traffic cost applies unless
-//                     GDRHCR_PARAMS sets one. Unset: no preparation. A bad file is reported on
-//                     standard error and made again
+//                     preprocessing limit, and 10 minutes) and writes it there; its traffic
+//                     cost applies unless GDRHCR_PARAMS sets one. Unset: no preparation. A bad
+//                     file is reported on standard error and made again
 //   GDRHCR_TURNS      mapf-wait (the planner's mapf steps with turns and waits,
 //                     gdrhcr::MapfInRotation) or native (its own rotation planning); default
 //                     gdrhcr::kLorrTurnPlanning

@@ -11,7 +11,8 @@
 // switch it; and it is the only one for a crowded fleet (rule crowded-fleet, planner_params.hpp),
 // where agents have no room to route around anything and short trials are noise.
 // The League's Start-Kit gives a preprocessing phase for such work (the LoRR adapter runs it
-// there, lorr_bridge.hpp); the ROS node and gdrhcr_sim load a file made by `gdrhcr_prep`.
+// there, lorr_bridge.hpp); the ROS node and gdrhcr_sim load a file made by
+// `gdrhcr_sim --prepare`.
 //
 // Optional by design: a plan never needs it. Loading checks the file's format and that it was
 // made for this map (a key over the map's size and cells) and fleet size, and throws PrepError
