@@ -35,6 +35,7 @@ nlohmann::json SimResult::to_json() const {
           {"step_wall_time_max_s", step_wall_max_s},
           {"step_cpu_time_mean_s", step_cpu_mean_s},
           {"wall_time_s", wall_time_s},
+          {"goals_timeline", {{"block_steps", kTimelineSteps}, {"goals", goals_timeline}}},
           {"progress",
            {{"agents_late", agents_late},
             {"goals_late", goals_late},
@@ -81,6 +82,7 @@ class Run {
       advance(steps);
     }
     r_.steps = steps;
+    r_.goals_timeline.resize((steps + SimResult::kTimelineSteps - 1) / SimResult::kTimelineSteps, 0);
     r_.throughput = steps > 0 ? double(r_.goals_reached) / steps : 0;
     r_.plan_time_mean_s = r_.planned_steps ? plan_sum_ / r_.planned_steps : 0;
     r_.step_wall_mean_s = steps > 0 ? wall_sum_ / steps : 0;
@@ -159,7 +161,12 @@ class Run {
     for (int i = 0; i < n_; ++i) {
       check_late(i, t + 1);
       if (pos_[i] != goals_[i].front()) continue;
-      if (errand_[i].front()) ++r_.goals_reached;
+      if (errand_[i].front()) {
+        ++r_.goals_reached;
+        const size_t block = t / SimResult::kTimelineSteps;
+        if (r_.goals_timeline.size() <= block) r_.goals_timeline.resize(block + 1, 0);
+        ++r_.goals_timeline[block];
+      }
       goals_[i].erase(goals_[i].begin());
       errand_[i].erase(errand_[i].begin());
       hand_out_goal(i);

@@ -125,6 +125,21 @@ TEST(Simulator, FreeFlowMatchesSingleAgentRun) {
   EXPECT_DOUBLE_EQ(r.throughput, r.free_flow_throughput);
 }
 
+TEST(Simulator, GoalsTimelineSumsToTheGoalsReached) {
+  // 250 steps: blocks of 100, 100 and 50 steps, and every goal in one of them.
+  Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+  RandomNavigationStream tasks(g, 5);
+  SimResult r = run_pibt(g, tasks, random_starts(g, 50, 5), 250);
+  ASSERT_EQ(r.goals_timeline.size(), 3u);
+  long sum = 0;
+  for (long n : r.goals_timeline) {
+    EXPECT_GT(n, 0);
+    sum += n;
+  }
+  EXPECT_EQ(sum, r.goals_reached);
+  EXPECT_EQ(r.to_json()["goals_timeline"]["goals"].size(), 3u);
+}
+
 // The priority is the time since the agent's last goal. In lifelong runs the next goal is handed
 // out before the next call, so an agent is never seen standing on its goal: the reset must come
 // from the goal changing. (Before the fix every priority grew by one per step forever.)

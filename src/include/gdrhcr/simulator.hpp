@@ -51,6 +51,10 @@ struct SimResult {
   long late_at_end = 0;      // agents whose current goal is late when the run ends
   int longest_wait = 0;      // most consecutive steps an agent stood still off its goal
   double max_lateness = 0;   // largest (steps taken or elapsed) / shortest distance of a goal
+  // Goals reached (errands) in each block of kTimelineSteps steps, the last block possibly short:
+  // shows where a long run loses its throughput.
+  static constexpr int kTimelineSteps = 100;
+  std::vector<long> goals_timeline;
   ActionModel action_model = ActionModel::kMapf;
   std::vector<std::vector<Cell>> paths;  // paths[agent][t], when recorded
   std::vector<std::vector<Heading>> headings;  // headings[agent][t], when recorded in rotation
