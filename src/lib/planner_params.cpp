@@ -50,10 +50,14 @@ std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerPa
 }
 // Fleets filling more than 90% of the free cells: guidance paths cannot be kept, PIBT alone moves,
 // and no agent retreats to let another pass (the rotation model's swap, after 20 steps standing).
-std::string rule_crowded(const std::string& param, const MapFacts& f, const PlannerParams&) {
-  const bool crowded = crowded_fleet(f);
-  if (param == "rotation-swap-wait") return crowded ? "0" : "20";
-  return crowded ? "none" : "local";
+std::string rule_crowded(const std::string&, const MapFacts& f, const PlannerParams&) {
+  return crowded_fleet(f) ? "0" : "20";  // rotation-swap-wait
+}
+// Guidance off where its paths cannot be followed: a crowded fleet, and in the rotation model a
+// fleet of thousands, whose lazily kept paths go stale in the jams of a long run.
+std::string rule_guidance_off(const std::string&, const MapFacts& f, const PlannerParams&) {
+  const bool off = crowded_fleet(f) || (f.model() == ActionModel::kRotation && thousands(f));
+  return off ? "none" : "local";
 }
 std::string rule_window(const std::string&, const MapFacts& f, const PlannerParams&) {
   return thousands(f) || many_cut_cells(f) ? "20" : "30";
@@ -85,10 +89,14 @@ const std::vector<ParamRule>& param_rules() {
        "none elsewhere or past 2,000 agents",
        std::string(kRulesFigure) + "motion-forecast", rule_forecast},
       {"crowded-fleet",
-       "fleets holding more than 90% of the free cells move by PIBT alone (guidance none): paths around others "
-       "cannot be followed there; and in the rotation model no agent retreats for another (rotation-swap-wait 0, "
-       "else 20 steps standing)",
+       "in the rotation model no agent retreats for another in fleets holding more than 90% of the free cells "
+       "(rotation-swap-wait 0, else 20 steps standing)",
        std::string(kRulesFigure) + "crowded-fleet", rule_crowded},
+      {"guidance-off",
+       "PIBT alone moves (guidance none) where guidance paths cannot be followed: fleets holding more than 90% of "
+       "the free cells, and in the rotation model fleets of more than 2,000 agents (lazy paths go stale in the jams "
+       "of long runs)",
+       std::string(kRulesFigure) + "guidance-off", rule_guidance_off},
       {"guidance-window",
        "30 steps on maps without many cut cells (head-on meetings in long aisles show up late), up to 2,000 agents; "
        "else 20",
@@ -220,7 +228,7 @@ std::vector<ParamSpec> gd_rhcr_table() {
   for (auto& r : t) {
     if (r.name == "lg-contraflow") r.value = "0.1", r.paper = "0";
     if (r.name == "lane-cost") r.rule = "lanes", r.paper = "0";
-    if (r.name == "guidance") r.rule = "crowded-fleet";
+    if (r.name == "guidance") r.rule = "guidance-off";
   }
   return t;
 }

@@ -91,6 +91,22 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   EXPECT_EQ(lane("default", ActionModel::kRotation), std::pair(std::string("2"), 2.0));
   EXPECT_EQ(lane("default", ActionModel::kMapf), std::pair(std::string("0"), 0.0));
   EXPECT_EQ(lane("paper", ActionModel::kRotation), std::pair(std::string("0"), 0.0));
+  // Rule guidance-off: a crowded fleet (over 90% of the free cells) in either model, and a fleet of
+  // thousands in the rotation model only; the paper has no guidance.
+  auto guidance = [&](const std::string& preset, int agents, ActionModel model) {
+    Params p;
+    p.set("preset", preset);
+    const PlannerParams v = PlannerParams::resolve("gd-rhcr", p, MapFacts(warehouse, agents, model));
+    for (auto& x : v.values())
+      if (x.spec->name == "guidance" && preset == "default") EXPECT_EQ(x.source, "rule guidance-off");
+    return v.text("guidance");
+  };
+  const int free = int(warehouse.free_cells().size());
+  EXPECT_EQ(guidance("default", 2500, ActionModel::kRotation), "none");
+  EXPECT_EQ(guidance("default", 2000, ActionModel::kRotation), "local");
+  EXPECT_EQ(guidance("default", 2500, ActionModel::kMapf), "local");
+  EXPECT_EQ(guidance("default", free * 95 / 100, ActionModel::kMapf), "none");
+  EXPECT_EQ(guidance("paper", 2500, ActionModel::kMapf), "none");
   // Given values win over the preset and the rules, and say so.
   Params p;
   p.set("preset", "paper");
