@@ -45,7 +45,7 @@ FreeCellIndex::FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked_
       throw std::invalid_argument("traffic-cost and lane-cost apply to the rotation model only");
     cost.assign(size_t(num_free) * kNumHeadings, 1);
     if (costs.traffic > 0) add_traffic_cost(costs.traffic);
-    if (costs.lane > 0) add_lane_cost(grid, costs.lane);
+    if (costs.lane > 0) add_lane_cost(grid, costs.lane, costs.lane_lines ? LaneStyle::kLines : LaneStyle::kAisles);
     if (max_cost == 1) cost.clear();  // e.g. lanes on a map without aisles: plain BFS rows
   }
   if (model == ActionModel::kRotation) {
@@ -92,8 +92,8 @@ void FreeCellIndex::add_traffic_cost(double strength) {
 
 // Lane cost (see the header): a forward move against the lane of the cell it enters costs
 // `extra` more, rounded.
-void FreeCellIndex::add_lane_cost(const Grid& grid, double extra) {
-  const Lanes lanes = derive_lanes(grid);
+void FreeCellIndex::add_lane_cost(const Grid& grid, double extra, LaneStyle style) {
+  const Lanes lanes = derive_lanes(grid, style);
   for (int32_t s = 0; s < num_free; ++s)
     for (Heading h = 0; h < kNumHeadings; ++h)
       if (lanes.against(grid, cell_of[s], h)) raise_cost(s, h, std::lround(extra));

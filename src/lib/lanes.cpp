@@ -30,9 +30,14 @@ std::vector<Heading> lanes_along(int lines, int len, Free free, Heading first, H
 
 }  // namespace
 
-Lanes derive_lanes(const Grid& grid) {
+Lanes derive_lanes(const Grid& grid, LaneStyle style) {
   const int w = grid.width(), h = grid.height();
   Lanes l;
+  if (style == LaneStyle::kLines) {
+    for (int y = 0; y < h; ++y) l.row.push_back(y % 2 ? kWest : kEast);
+    for (int x = 0; x < w; ++x) l.col.push_back(x % 2 ? kNorth : kSouth);
+    return l;
+  }
   l.row = lanes_along(h, w, [&](int y, int x) { return grid.is_free(grid.cell(x, y)); }, kEast, kWest);
   l.col = lanes_along(w, h, [&](int x, int y) { return grid.is_free(grid.cell(x, y)); }, kSouth, kNorth);
   return l;

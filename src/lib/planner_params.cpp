@@ -64,7 +64,8 @@ std::string rule_window(const std::string&, const MapFacts& f, const PlannerPara
 }
 // One-way lanes (lanes.hpp) where turning round in a one-cell aisle costs two turns: the
 // rotation model. In the mapf model a robot backs out of an aisle in one step.
-std::string rule_lanes(const std::string&, const MapFacts& f, const PlannerParams&) {
+std::string rule_lanes(const std::string& param, const MapFacts& f, const PlannerParams&) {
+  if (param == "lanes") return f.model() == ActionModel::kRotation && thousands(f) ? "lines" : "aisles";
   return f.model() == ActionModel::kRotation ? "2" : "0";
 }
 std::string rule_far_cost(const std::string&, const MapFacts&, const PlannerParams& earlier) {
@@ -102,8 +103,9 @@ const std::vector<ParamRule>& param_rules() {
        "else 20",
        std::string(kRulesFigure) + "guidance-window", rule_window},
       {"lanes",
-       "rotation model: a forward move against a one-way lane derived from the map's one-cell aisles costs 2 more "
-       "(lane-cost 2; lanes.hpp); mapf model: none",
+       "rotation model: a forward move against a one-way lane costs 2 more (lane-cost 2; lanes.hpp); the lanes are "
+       "the map's one-cell aisles, and for fleets of more than 2,000 agents every row and column (lanes lines); "
+       "mapf model: none",
        std::string(kRulesFigure) + "lanes", rule_lanes},
       {"far-cost", "where the motion forecast runs, conflicts lg-near-steps or more ahead cost 2; else as lg-cost (-1)",
        std::string(kRulesFigure) + "far-cost", rule_far_cost},
@@ -156,7 +158,10 @@ std::vector<ParamSpec> pibt_rows() {
                "flow), so distances lead around them (0 = none)"),
           real("lane-cost", 0, 8, "0",
                "rotation model: extra cost of a forward move against a one-way lane derived from the map's one-cell "
-               "aisles (0 = none)")};
+               "aisles (0 = none)"),
+          choice("lanes", {"aisles", "lines"}, "aisles",
+                 "rotation model, with lane-cost: the one-way lanes are the map's one-cell aisles, or every row and "
+                 "column, alternating")};
 }
 
 // Local guidance (PIBT following windowed paths); `product` selects GD-RHCR's product defaults.
@@ -228,6 +233,7 @@ std::vector<ParamSpec> gd_rhcr_table() {
   for (auto& r : t) {
     if (r.name == "lg-contraflow") r.value = "0.1", r.paper = "0";
     if (r.name == "lane-cost") r.rule = "lanes", r.paper = "0";
+    if (r.name == "lanes") r.rule = "lanes", r.paper = "aisles";
     if (r.name == "guidance") r.rule = "guidance-off";
   }
   return t;
@@ -389,6 +395,7 @@ std::string PlannerParams::format() const {
 
 StepCosts step_costs(const PlannerParams& values, ActionModel model) {
   StepCosts c;
+  c.lane_lines = values.has("lanes") && values.text("lanes") == "lines";
   for (auto [name, value] : {std::pair{"traffic-cost", &c.traffic}, std::pair{"lane-cost", &c.lane}}) {
     *value = values.has(name) ? values.real(name) : 0;
     if (*value > 0 && model != ActionModel::kRotation)

@@ -60,3 +60,15 @@ TEST(Lanes, TheBenchmarkMapsTheirStructureCalls) {
     if (!c.cols) EXPECT_EQ(cols, 0) << c.map;
   }
 }
+
+TEST(Lanes, TheLinesStyleAlternatesEveryRowAndColumn) {
+  // Every row and column is a lane, alternating by parity, open areas and obstacles alike.
+  const Grid g = Grid::from_rows({"....", ".@..", "....", "...."});
+  const Lanes l = derive_lanes(g, LaneStyle::kLines);
+  EXPECT_EQ(l.row, (std::vector<Heading>{kEast, kWest, kEast, kWest}));
+  EXPECT_EQ(l.col, (std::vector<Heading>{kSouth, kNorth, kSouth, kNorth}));
+  EXPECT_TRUE(l.against(g, g.cell(2, 1), kEast));   // row 1 goes west
+  EXPECT_TRUE(l.against(g, g.cell(2, 2), kNorth));  // column 2 goes south
+  EXPECT_FALSE(l.against(g, g.cell(2, 2), kEast));
+  EXPECT_EQ(derive_lanes(g).num_lanes(), 0);  // no aisles here
+}

@@ -91,6 +91,16 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   EXPECT_EQ(lane("default", ActionModel::kRotation), std::pair(std::string("2"), 2.0));
   EXPECT_EQ(lane("default", ActionModel::kMapf), std::pair(std::string("0"), 0.0));
   EXPECT_EQ(lane("paper", ActionModel::kRotation), std::pair(std::string("0"), 0.0));
+  // ... on the aisles, and on every row and column for a fleet of thousands.
+  auto lines = [&](const std::string& preset, int agents) {
+    Params p;
+    p.set("preset", preset);
+    PlannerParams v = PlannerParams::resolve("gd-rhcr", p, MapFacts(warehouse, agents, ActionModel::kRotation));
+    return std::pair{v.text("lanes"), step_costs(v, ActionModel::kRotation).lane_lines};
+  };
+  EXPECT_EQ(lines("default", 400), std::pair(std::string("aisles"), false));
+  EXPECT_EQ(lines("default", 2500), std::pair(std::string("lines"), true));
+  EXPECT_EQ(lines("paper", 2500), std::pair(std::string("aisles"), false));
   // Rule guidance-off: a crowded fleet (over 90% of the free cells) in either model, and a fleet of
   // thousands in the rotation model only; the paper has no guidance.
   auto guidance = [&](const std::string& preset, int agents, ActionModel model) {

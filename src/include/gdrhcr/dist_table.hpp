@@ -51,6 +51,7 @@
 
 #include "gdrhcr/action_model.hpp"
 #include "gdrhcr/grid.hpp"
+#include "gdrhcr/lanes.hpp"
 
 
 namespace gdrhcr {
@@ -61,6 +62,7 @@ constexpr int kUnreachable = INT32_MAX / 4;
 struct StepCosts {
   double traffic = 0;  // up to this much more into the busiest cells
   double lane = 0;     // this much more against a lane's direction
+  bool lane_lines = false;  // lanes on every row and column (LaneStyle::kLines), not the aisles only
   bool any() const { return traffic > 0 || lane > 0; }
 };
 
@@ -84,7 +86,7 @@ struct FreeCellIndex {
   static constexpr int kTrafficRoots = 64;
   static constexpr double kTrafficPercentile = 0.99;
   void add_traffic_cost(double strength);
-  void add_lane_cost(const Grid& grid, double extra);
+  void add_lane_cost(const Grid& grid, double extra, LaneStyle style);
   void raise_cost(int32_t slot, int heading, long extra);
   // A shortest path over (cell, heading) states makes at most F - 1 moves, at most one turn
   // between two moves and two before the first, so its length is below 2F: rotation rows are

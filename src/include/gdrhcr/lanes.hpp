@@ -11,6 +11,11 @@
 //     a one-way lane. Successive lanes alternate: east, west, east, ... (columns: south, north);
 //   - wider runs of open rows are open areas (a depot, a random map, a room), and get no
 //     direction: there robots pass each other without turning round.
+// Style kLines makes every row and column a lane instead, alternating by parity (a crisscross,
+// like WPPL's weights for its city and random maps). It organises open areas too, which the
+// aisle rule leaves two-way. With guidance it loses where there are no aisles, but a fleet of
+// thousands moved by PIBT over the distances alone holds its throughput with it (rule lanes,
+// planner_params.cpp).
 // A lane gives a direction only; DistTable makes a forward move against it dearer (lane-cost),
 // so distances, and every planner that follows them, prefer the lane's way but may still take
 // a short way back (it is a cost, not a rule, and never needed for a valid plan).
@@ -32,6 +37,8 @@ struct Lanes {
   int num_lanes() const;
 };
 
-Lanes derive_lanes(const Grid& grid);
+enum class LaneStyle { kAisles, kLines };
+
+Lanes derive_lanes(const Grid& grid, LaneStyle style = LaneStyle::kAisles);
 
 }  // namespace gdrhcr
