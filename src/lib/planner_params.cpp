@@ -54,8 +54,8 @@ std::string rule_thousands(const std::string& param, const MapFacts& f, const Pl
 std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerParams&) {
   return !thousands(f) && many_cut_cells(f) ? "8" : "0";
 }
-// Fleets filling more than 90% of the free cells: guidance paths cannot be kept, PIBT alone moves,
-// and no agent retreats to let another pass (the rotation model's swap, after 20 steps standing).
+// Fleets filling more than 90% of the free cells: no agent retreats to let another pass (the
+// rotation model's swap, after 20 steps standing).
 std::string rule_crowded(const std::string&, const MapFacts& f, const PlannerParams&) {
   return crowded_fleet(f) ? "0" : "20";  // rotation-swap-wait
 }
@@ -112,8 +112,7 @@ const std::vector<ParamRule>& param_rules() {
       {"lanes",
        "rotation model: a forward move against a one-way lane costs 2 more (lane-cost 2; lanes.hpp); the lanes are "
        "the map's one-cell aisles, and on a map with such aisles, for fleets of more than 2,000 agents, every row "
-       "and column (lanes lines); "
-       "mapf model: none",
+       "and column (lanes lines); mapf model: none",
        std::string(kRulesFigure) + "lanes", rule_lanes},
       {"far-cost", "where the motion forecast runs, conflicts lg-near-steps or more ahead cost 2; else as lg-cost (-1)",
        std::string(kRulesFigure) + "far-cost", rule_far_cost},
@@ -165,8 +164,8 @@ std::vector<ParamSpec> pibt_rows() {
                "rotation model: extra cost of a forward move into the map's busiest cells (by sampled shortest-path "
                "flow), so distances lead around them (0 = none)"),
           real("lane-cost", 0, 8, "0",
-               "rotation model: extra cost of a forward move against a one-way lane derived from the map's one-cell "
-               "aisles (0 = none)"),
+               "rotation model: extra cost of a forward move against a one-way lane derived from the map (see lanes; "
+               "0 = none)"),
           choice("lanes", {"aisles", "lines"}, "aisles",
                  "rotation model, with lane-cost: the one-way lanes are the map's one-cell aisles, or every row and "
                  "column, alternating")};
