@@ -45,7 +45,7 @@ FreeCellIndex::FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked_
       throw std::invalid_argument("traffic-cost and lane-cost apply to the rotation model only");
     cost.assign(size_t(num_free) * kNumHeadings, 1);
     if (costs.traffic > 0) add_traffic_cost(costs.traffic);
-    if (costs.lane > 0) add_lane_cost(grid, costs.lane, costs.lane_lines ? LaneStyle::kLines : LaneStyle::kAisles);
+    if (costs.lane > 0) add_lane_cost(grid, costs.lane, costs.lane_style);
     if (max_cost == 1) cost.clear();  // e.g. lanes on a map without aisles: plain BFS rows
   }
   if (model == ActionModel::kRotation) {

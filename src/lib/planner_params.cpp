@@ -402,7 +402,7 @@ std::string PlannerParams::format() const {
 
 StepCosts step_costs(const PlannerParams& values, ActionModel model) {
   StepCosts c;
-  c.lane_lines = values.has("lanes") && values.text("lanes") == "lines";
+  if (values.has("lanes") && values.text("lanes") == "lines") c.lane_style = LaneStyle::kLines;
   for (auto [name, value] : {std::pair{"traffic-cost", &c.traffic}, std::pair{"lane-cost", &c.lane}}) {
     *value = values.has(name) ? values.real(name) : 0;
     if (*value > 0 && model != ActionModel::kRotation)

@@ -14,6 +14,11 @@ static double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+// Blocks of SimResult::kTimelineSteps steps that `steps` steps fill, the last one possibly short.
+static size_t blocks(int steps) {
+  return steps > 0 ? (steps + SimResult::kTimelineSteps - 1) / SimResult::kTimelineSteps : 0;
+}
+
 static double process_cpu_s() {
   timespec ts{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
@@ -59,6 +64,7 @@ class Run {
     r_.steps = options.steps;
     r_.agents = n_;
     r_.action_model = options.action_model;
+    r_.goals_timeline.assign(blocks(options.steps), 0);
     init_headings();
     validator_.require_valid(pos_, pos_, -1, heads(), heads());  // the start: free, distinct cells
     const int lookahead = std::max(1, options.lookahead);
@@ -82,7 +88,7 @@ class Run {
       advance(steps);
     }
     r_.steps = steps;
-    r_.goals_timeline.resize((steps + SimResult::kTimelineSteps - 1) / SimResult::kTimelineSteps, 0);
+    r_.goals_timeline.resize(blocks(steps));
     r_.throughput = steps > 0 ? double(r_.goals_reached) / steps : 0;
     r_.plan_time_mean_s = r_.planned_steps ? plan_sum_ / r_.planned_steps : 0;
     r_.step_wall_mean_s = steps > 0 ? wall_sum_ / steps : 0;
@@ -163,9 +169,7 @@ class Run {
       if (pos_[i] != goals_[i].front()) continue;
       if (errand_[i].front()) {
         ++r_.goals_reached;
-        const size_t block = t / SimResult::kTimelineSteps;
-        if (r_.goals_timeline.size() <= block) r_.goals_timeline.resize(block + 1, 0);
-        ++r_.goals_timeline[block];
+        ++r_.goals_timeline[t / SimResult::kTimelineSteps];
       }
       goals_[i].erase(goals_[i].begin());
       errand_[i].erase(errand_[i].begin());

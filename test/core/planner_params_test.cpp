@@ -96,7 +96,7 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
     Params p;
     p.set("preset", preset);
     PlannerParams v = PlannerParams::resolve("gd-rhcr", p, MapFacts(warehouse, agents, ActionModel::kRotation));
-    return std::pair{v.text("lanes"), step_costs(v, ActionModel::kRotation).lane_lines};
+    return std::pair{v.text("lanes"), step_costs(v, ActionModel::kRotation).lane_style == LaneStyle::kLines};
   };
   EXPECT_EQ(lines("default", 400), std::pair(std::string("aisles"), false));
   EXPECT_EQ(lines("default", 2500), std::pair(std::string("lines"), true));

@@ -62,7 +62,7 @@ constexpr int kUnreachable = INT32_MAX / 4;
 struct StepCosts {
   double traffic = 0;  // up to this much more into the busiest cells
   double lane = 0;     // this much more against a lane's direction
-  bool lane_lines = false;  // lanes on every row and column (LaneStyle::kLines), not the aisles only
+  LaneStyle lane_style = LaneStyle::kAisles;  // which lines the lanes are (lanes.hpp)
   bool any() const { return traffic > 0 || lane > 0; }
 };
 
