@@ -28,18 +28,35 @@ std::vector<Heading> lanes_along(int lines, int len, Free free, Heading first, H
   return dir;
 }
 
+// kLines along one axis: a line is a lane when at least half of the moves along it (pairs of
+// neighbouring cells) are between free cells; lanes alternate in order among those lines, so a
+// map whose obstacles fall on every other line still gets both directions.
+template <typename Free>
+std::vector<Heading> lines_along(int lines, int len, Free free, Heading first, Heading second) {
+  std::vector<Heading> dir(lines, kNoHeading);
+  int lane = 0;
+  for (int i = 0; i < lines; ++i) {
+    int moves = 0;
+    for (int k = 0; k + 1 < len; ++k) moves += free(i, k) && free(i, k + 1);
+    if (2 * moves >= len - 1) dir[i] = lane++ % 2 ? second : first;
+  }
+  return dir;
+}
+
 }  // namespace
 
 Lanes derive_lanes(const Grid& grid, LaneStyle style) {
   const int w = grid.width(), h = grid.height();
   Lanes l;
+  auto row_free = [&](int y, int x) { return grid.is_free(grid.cell(x, y)); };
+  auto col_free = [&](int x, int y) { return grid.is_free(grid.cell(x, y)); };
   if (style == LaneStyle::kLines) {
-    for (int y = 0; y < h; ++y) l.row.push_back(y % 2 ? kWest : kEast);
-    for (int x = 0; x < w; ++x) l.col.push_back(x % 2 ? kNorth : kSouth);
+    l.row = lines_along(h, w, row_free, kEast, kWest);
+    l.col = lines_along(w, h, col_free, kSouth, kNorth);
     return l;
   }
-  l.row = lanes_along(h, w, [&](int y, int x) { return grid.is_free(grid.cell(x, y)); }, kEast, kWest);
-  l.col = lanes_along(w, h, [&](int x, int y) { return grid.is_free(grid.cell(x, y)); }, kSouth, kNorth);
+  l.row = lanes_along(h, w, row_free, kEast, kWest);
+  l.col = lanes_along(w, h, col_free, kSouth, kNorth);
   return l;
 }
 

@@ -62,13 +62,26 @@ TEST(Lanes, TheBenchmarkMapsTheirStructureCalls) {
 }
 
 TEST(Lanes, TheLinesStyleAlternatesEveryRowAndColumn) {
-  // Every row and column is a lane, alternating by parity, open areas and obstacles alike.
-  const Grid g = Grid::from_rows({"....", ".@..", "....", "...."});
+  // Every row and column one can travel along is a lane, alternating; one obstacle does not
+  // close a line.
+  const Grid g = Grid::from_rows({"......", ".@....", "......", "......", "......", "......"});
   const Lanes l = derive_lanes(g, LaneStyle::kLines);
-  EXPECT_EQ(l.row, (std::vector<Heading>{kEast, kWest, kEast, kWest}));
-  EXPECT_EQ(l.col, (std::vector<Heading>{kSouth, kNorth, kSouth, kNorth}));
+  EXPECT_EQ(l.row, (std::vector<Heading>{kEast, kWest, kEast, kWest, kEast, kWest}));
+  EXPECT_EQ(l.col, (std::vector<Heading>{kSouth, kNorth, kSouth, kNorth, kSouth, kNorth}));
   EXPECT_TRUE(l.against(g, g.cell(2, 1), kEast));   // row 1 goes west
   EXPECT_TRUE(l.against(g, g.cell(2, 2), kNorth));  // column 2 goes south
   EXPECT_FALSE(l.against(g, g.cell(2, 2), kEast));
   EXPECT_EQ(derive_lanes(g).num_lanes(), 0);  // no aisles here
+}
+
+TEST(Lanes, TheLinesStyleSkipsLinesTheObstaclesBreak) {
+  // A sortation-like lattice: every other row and column has an obstacle in every other cell.
+  // Those lines are no lanes, and the open ones alternate among themselves, so both directions
+  // get open lines (by parity every open row would go east and every open column south).
+  const Grid g = Grid::from_rows({".......", ".@.@.@.", ".......", ".@.@.@.", ".......", ".@.@.@.", "......."});
+  const Lanes l = derive_lanes(g, LaneStyle::kLines);
+  EXPECT_EQ(l.row, (std::vector<Heading>{kEast, kNoHeading, kWest, kNoHeading, kEast, kNoHeading, kWest}));
+  EXPECT_EQ(l.col, (std::vector<Heading>{kSouth, kNoHeading, kNorth, kNoHeading, kSouth, kNoHeading, kNorth}));
+  EXPECT_FALSE(l.against(g, g.cell(1, 1), kWest));  // no lane along row 1: any way is as cheap
+  EXPECT_TRUE(l.against(g, g.cell(3, 2), kEast));   // row 2 goes west
 }
