@@ -24,11 +24,6 @@ double MapFacts::cut_cell_share() const {
 constexpr double kCrowdedFleet = 0.9;
 bool crowded_fleet(const MapFacts& f) { return f.fleet_share() > kCrowdedFleet; }
 
-bool MapFacts::has_aisles() const {
-  if (!aisles_) aisles_ = derive_lanes(*grid_).num_lanes() > 0;
-  return *aisles_;
-}
-
 double MapFacts::fleet_share() const {
   return double(num_agents_) / std::max<size_t>(1, grid_->free_cells().size());
 }
@@ -72,7 +67,7 @@ std::string rule_window(const std::string&, const MapFacts& f, const PlannerPara
 // rotation model. In the mapf model a robot backs out of an aisle in one step.
 std::string rule_lanes(const std::string& param, const MapFacts& f, const PlannerParams&) {
   if (param == "lanes")
-    return f.model() == ActionModel::kRotation && thousands(f) && f.has_aisles() ? "lines" : "aisles";
+    return f.model() == ActionModel::kRotation && thousands(f) ? "lines" : "aisles";
   return f.model() == ActionModel::kRotation ? "2" : "0";
 }
 std::string rule_far_cost(const std::string&, const MapFacts&, const PlannerParams& earlier) {
@@ -111,8 +106,8 @@ const std::vector<ParamRule>& param_rules() {
        std::string(kRulesFigure) + "guidance-window", rule_window},
       {"lanes",
        "rotation model: a forward move against a one-way lane costs 2 more (lane-cost 2; lanes.hpp); the lanes are "
-       "the map's one-cell aisles, and on a map with such aisles, for fleets of more than 2,000 agents, every row "
-       "and column (lanes lines); mapf model: none",
+       "the map's one-cell aisles, and for fleets of more than 2,000 agents every row and column one can travel "
+       "along (lanes lines); mapf model: none",
        std::string(kRulesFigure) + "lanes", rule_lanes},
       {"far-cost", "where the motion forecast runs, conflicts lg-near-steps or more ahead cost 2; else as lg-cost (-1)",
        std::string(kRulesFigure) + "far-cost", rule_far_cost},
@@ -168,7 +163,7 @@ std::vector<ParamSpec> pibt_rows() {
                "0 = none)"),
           choice("lanes", {"aisles", "lines"}, "aisles",
                  "rotation model, with lane-cost: the one-way lanes are the map's one-cell aisles, or every row and "
-                 "column, alternating")};
+                 "column one can travel along, alternating")};
 }
 
 // Local guidance (PIBT following windowed paths); `product` selects GD-RHCR's product defaults.

@@ -101,9 +101,11 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   EXPECT_EQ(lines("default", 400), std::pair(std::string("aisles"), false));
   EXPECT_EQ(lines("default", 2500), std::pair(std::string("lines"), true));
   EXPECT_EQ(lines("paper", 2500), std::pair(std::string("aisles"), false));
-  // A map without aisles keeps the aisle style (so no lanes) whatever the fleet.
+  // A map without aisles gets them too, for a fleet of thousands in the rotation model only.
   Params none;
   EXPECT_EQ(PlannerParams::resolve("gd-rhcr", none, MapFacts(random, 2500, ActionModel::kRotation)).text("lanes"),
+            "lines");
+  EXPECT_EQ(PlannerParams::resolve("gd-rhcr", none, MapFacts(random, 2500, ActionModel::kMapf)).text("lanes"),
             "aisles");
   // Rule guidance-off: a crowded fleet (over 90% of the free cells) in either model, and a fleet of
   // thousands in the rotation model only; the paper has no guidance.

@@ -42,14 +42,12 @@ class MapFacts {
   int num_agents() const { return num_agents_; }
   ActionModel model() const { return model_; }
   double cut_cell_share() const;  // computed once, on first use
-  bool has_aisles() const;        // one-cell aisles (lanes.hpp) anywhere; computed once
   double fleet_share() const;     // agents per free cell
  private:
   const Grid* grid_;
   int num_agents_;
   ActionModel model_;
   mutable std::optional<double> cut_share_;
-  mutable std::optional<bool> aisles_;
 };
 
 class PlannerParams;
