@@ -45,7 +45,7 @@ struct PrepOptions {
   std::string planner = "gd-rhcr";
   Params given;                               // the planner's parameters besides the tuned ones
   std::vector<double> traffic_costs{0, 2};    // candidates; the first is the fallback
-  int steps = 600;                            // per trial
+  int steps = 1500;                           // per trial: long enough for a long run's jams
   int seeds = 2;                              // trials per candidate: seeds seed, seed + 1, ...
   double step_budget_s = 0;                   // the planner's step budget in trials (0 = none:
                                               //   trials then repeat exactly, whatever the load)
