@@ -82,6 +82,7 @@ TEST(Lanes, TheLinesStyleSkipsLinesTheObstaclesBreak) {
   const Lanes l = derive_lanes(g, LaneStyle::kLines);
   EXPECT_EQ(l.row, (std::vector<Heading>{kEast, kNoHeading, kWest, kNoHeading, kEast, kNoHeading, kWest}));
   EXPECT_EQ(l.col, (std::vector<Heading>{kSouth, kNoHeading, kNorth, kNoHeading, kSouth, kNoHeading, kNorth}));
-  EXPECT_FALSE(l.against(g, g.cell(1, 1), kWest));  // no lane along row 1: any way is as cheap
+  EXPECT_FALSE(l.against(g, g.cell(2, 1), kWest));  // no lane along row 1: any way is as cheap
+  EXPECT_FALSE(l.against(g, g.cell(2, 1), kEast));
   EXPECT_TRUE(l.against(g, g.cell(3, 2), kEast));   // row 2 goes west
 }

@@ -14,10 +14,8 @@
 // Style kLines makes every row and column one can travel along a lane instead (at least half of
 // the moves along it between free cells), alternating in order among those lines (a crisscross,
 // like WPPL's weights for its city and random maps). It organises open areas too, which the
-// aisle rule leaves two-way. Alternating by parity instead gave one direction every line a
-// sortation map's obstacles break (they sit on every other row and column) and the other
-// direction every open one (docs/results.md, session 15). With guidance it loses where there are no aisles, but a fleet of
-// thousands moved by PIBT over the distances alone holds its throughput with it (rule lanes,
+// aisle rule leaves two-way. With guidance it loses where there are no aisles, but a fleet of
+// thousands moved by PIBT over the distances alone gains with it (rule lanes,
 // planner_params.cpp).
 // A lane gives a direction only; DistTable makes a forward move against it dearer (lane-cost),
 // so distances, and every planner that follows them, prefer the lane's way but may still take
