@@ -41,6 +41,54 @@ void PibtStep::update_priority(const WorldView& world, int i, Cell goal) {
   last_goal_[i] = goal;
 }
 
+// The goal PIBT moves agent i towards now: its own cell while it waits to set out for a dead end
+// (dead_end_wait), else its goal.
+Cell PibtStep::goal_now(const WorldView& world, int i) {
+  const Cell here = world.positions[i];
+  const Cell g = world.goals[i].empty() ? here : world.goals[i][0];
+  if (opt_.dead_end_wait <= 0 || g == here) return g;
+  if (waited_for_.size() < priority_.size()) waited_for_.resize(priority_.size(), kNoCell), wait_until_.resize(priority_.size(), 0);
+  const auto nb = grid_.neighbours(g);
+  if (nb.end() - nb.begin() > 1) return g;
+  if (waited_for_[i] != g) waited_for_[i] = g, wait_until_[i] = world.timestep + opt_.dead_end_wait;
+  return world.timestep < wait_until_[i] ? here : g;
+}
+
+// rotation_commit: while the configuration chosen earlier is not reached (and for at most three
+// steps), this step carries on towards it instead of planning a new one; a new configuration
+// becomes the target. Only for a call that moves the whole fleet, with nothing fixed or blocked.
+// Returns true when `next` holds the step carried on.
+bool PibtStep::carry_on(const WorldView& world, std::vector<Cell>& next, const std::vector<int>& agents,
+                        const std::vector<std::pair<Cell, Cell>>& fixed_moves) {
+  const int n = world.num_agents();
+  const bool whole = opt_.rotation_commit && world.rotation() && static_cast<int>(order_.size()) == n &&
+                     (agents.empty() || static_cast<int>(agents.size()) == n) && fixed_moves.empty() &&
+                     !world.immovable && !(world.blocked && !world.blocked->empty());
+  if (!whole) {
+    target_steps_ = 0;
+    return false;
+  }
+  bool going = target_steps_ > 0 && target_steps_ < 3 && static_cast<int>(target_.size()) == n;
+  bool arrived = true;
+  for (int i = 0; going && i < n; ++i) {  // every agent where the plan left it: its origin or its cell
+    arrived = arrived && world.positions[i] == target_[i];
+    going = world.positions[i] == target_[i] || world.positions[i] == origin_[i];
+  }
+  if (!going || arrived) {  // plan a new configuration and take its first step
+    push_all(world, next, fixed_moves);
+    target_.assign(next.begin(), next.begin() + n);
+    origin_ = world.positions;
+    target_steps_ = 1;
+    execute_with_turns(world, next);
+    return true;
+  }
+  for (int i : order_) occupied_now_[world.positions[i]] = kFree;
+  std::copy(target_.begin(), target_.end(), next.begin());
+  ++target_steps_;
+  execute_with_turns(world, next);
+  return true;
+}
+
 // Steps the agent has stood in its cell; a second call in the same timestep changes nothing.
 void PibtStep::update_standing(const WorldView& world, int i) {
   if (standing_t_[i] == world.timestep) return;
@@ -86,7 +134,7 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
     order_ = agents;
   }
   for (int i : order_) {
-    const Cell g = world.goals[i].empty() ? world.positions[i] : world.goals[i][0];
+    const Cell g = goal_now(world, i);
     update_priority(world, i, g);
     if (world.rotation()) update_standing(world, i);  // only the rotation model's swap reads it
     goal_of_[i] = g;
@@ -97,7 +145,7 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   if (world.rotation() && opt_.rotation == PibtOptions::Rotation::kOperations) {
     plan_operations(world, next, fixed_moves);
     for (int i : order_) occupied_now_[world.positions[i]] = kFree;
-  } else {
+  } else if (!carry_on(world, next, agents, fixed_moves)) {
     push_all(world, next, fixed_moves);
     if (world.rotation()) execute_with_turns(world, next);
   }

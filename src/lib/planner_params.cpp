@@ -49,10 +49,14 @@ std::string rule_thousands(const std::string& param, const MapFacts& f, const Pl
 std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerParams&) {
   return !thousands(f) && many_cut_cells(f) ? "8" : "0";
 }
-// Fleets filling more than 90% of the free cells: no agent retreats to let another pass (the
-// rotation model's swap, after 20 steps standing).
-std::string rule_crowded(const std::string&, const MapFacts& f, const PlannerParams&) {
-  return crowded_fleet(f) ? "0" : "20";  // rotation-swap-wait
+// Fleets filling more than 90% of the free cells, in the rotation model: no agent retreats to let
+// another pass (the swap, after 20 steps standing), PIBT's configurations are carried out to the
+// end, and agents wait 500 steps before they set out for a dead end.
+std::string rule_crowded(const std::string& param, const MapFacts& f, const PlannerParams&) {
+  const bool crowded = crowded_fleet(f);
+  if (param == "rotation-commit") return crowded && f.model() == ActionModel::kRotation ? "1" : "0";
+  if (param == "dead-end-wait") return crowded && f.model() == ActionModel::kRotation ? "500" : "0";
+  return crowded ? "0" : "20";  // rotation-swap-wait
 }
 // Guidance off where its paths cannot be followed: a crowded fleet, and in the rotation model a
 // fleet of thousands, whose lazily kept paths go stale in the jams of a long run.
@@ -92,8 +96,9 @@ const std::vector<ParamRule>& param_rules() {
        "none elsewhere or past 2,000 agents",
        std::string(kRulesFigure) + "motion-forecast", rule_forecast},
       {"crowded-fleet",
-       "in the rotation model no agent retreats for another in fleets holding more than 90% of the free cells "
-       "(rotation-swap-wait 0, else 20 steps standing)",
+       "in the rotation model, fleets holding more than 90% of the free cells: no agent retreats for another "
+       "(rotation-swap-wait 0, else 20 steps standing), PIBT's configurations are carried out to the end "
+       "(rotation-commit 1) and agents wait 500 steps before they set out for a dead end (dead-end-wait 500)",
        std::string(kRulesFigure) + "crowded-fleet", rule_crowded},
       {"guidance-off",
        "PIBT alone moves (guidance none) where guidance paths cannot be followed: fleets holding more than 90% of "
@@ -148,6 +153,13 @@ std::vector<ParamSpec> pibt_rows() {
   return {flag("swap", "1", "LaCAM*'s swap operation (in the rotation model see rotation-swap-wait)", "0"),
           integer("rotation-swap-wait", 0, 1000, "",
                   "rotation model: the swap applies to an agent that has stood in its cell this many steps (0 = never)",
+                  "crowded-fleet", "0"),
+          flag("rotation-commit", "",
+               "rotation model, cells: carry out each configuration PIBT chooses for the whole fleet (turns, then "
+               "moves; agents that arrived wait) before planning the next", "0", "crowded-fleet"),
+          integer("dead-end-wait", 0, 1000000, "",
+                  "steps an agent whose goal is a dead end (one free neighbour) waits where it stands before it sets "
+                  "out for it (0 = never)",
                   "crowded-fleet", "0"),
           flag("priority-reset", "1", "reset an agent's priority when it reaches a goal"),
           choice("tie-break", {"free-first", "random"}, "free-first",

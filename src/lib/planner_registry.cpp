@@ -21,6 +21,8 @@ PibtOptions pibt_options(const PlannerParams& v) {
   o.tie_break = v.text("tie-break") == "random" ? PibtOptions::TieBreak::kRandom : PibtOptions::TieBreak::kFreeFirst;
   o.rotation = v.text("rotation-pibt") == "cells" ? PibtOptions::Rotation::kCells : PibtOptions::Rotation::kOperations;
   o.rotation_swap_wait = v.integer("rotation-swap-wait");
+  o.rotation_commit = v.flag("rotation-commit");
+  o.dead_end_wait = v.integer("dead-end-wait");
   return o;
 }
 

@@ -7,6 +7,7 @@
 #include <dirent.h>
 
 #include <algorithm>
+#include <functional>
 
 #include "gdrhcr/planner.hpp"
 #include "gdrhcr/simulator.hpp"
@@ -254,4 +255,71 @@ TEST(RotationPlanners, AnAgentBlockingADeadEndRetreatsAfterStandingLong) {
     EXPECT_GT(done, 0) << "the pair never got past each other";
   }
   EXPECT_GT(deadlocked, 0) << "no seed put the agent facing the dead end first: the test shows nothing";
+}
+
+namespace {
+// One agent in the open, rotation model, PIBT with `params`; its goal is `goal_at(t)` at step t.
+// Returns its cells over `steps` steps (each step validated).
+std::vector<Cell> lone_agent(const Grid& g, Params params, Cell start, Heading heading,
+                             const std::function<Cell(int)>& goal_at, int steps) {
+  DistTable dist(g, ActionModel::kRotation);
+  auto planner = make_planner("pibt", params, g, 1, 1, ActionModel::kRotation);
+  StepValidator validator(g, ActionModel::kRotation);
+  std::vector<Cell> pos = {start}, cells = {start};
+  std::vector<Heading> heads = {heading};
+  for (int t = 0; t < steps; ++t) {
+    const std::vector<std::vector<Cell>> goals = {{goal_at(t)}};
+    WorldView w{g, dist, t, pos, goals};
+    w.action_model = ActionModel::kRotation;
+    std::vector<Heading> next_heads(1, kNoHeading);
+    w.headings = &heads;
+    w.next_headings = &next_heads;
+    std::vector<Cell> next(1, kNoCell);
+    planner->plan_step(w, next);
+    const auto bad = validator.check(pos, next, &heads, &next_heads);
+    EXPECT_FALSE(bad) << bad->describe(g, t);
+    pos = next, heads = next_heads;
+    cells.push_back(pos[0]);
+  }
+  return cells;
+}
+}  // namespace
+
+TEST(RotationPlanners, ACommittedConfigurationIsCarriedOutBeforePibtPlansAgain) {
+  // The agent faces west and PIBT sends it east (two turns, then forward). After the first turn
+  // its goal moves behind it, to the west. Replanning every step turns it back and it goes west
+  // at once; with rotation-commit it first finishes the move east (turn, forward), then comes back.
+  const Grid g = Grid::from_rows({".......", ".......", "......."});
+  const Cell start = g.cell(3, 1), east = g.cell(4, 1), west = g.cell(0, 1);
+  auto goal = [&](int t) { return t == 0 ? g.cell(6, 1) : west; };
+  for (const char* commit : {"0", "1"}) {
+    SCOPED_TRACE(std::string("rotation-commit ") + commit);
+    Params p;
+    p.set("rotation-commit", commit);
+    const auto cells = lone_agent(g, p, start, kWest, goal, 12);
+    const bool went_east = std::find(cells.begin(), cells.end(), east) != cells.end();
+    EXPECT_EQ(went_east, std::string(commit) == "1");
+    EXPECT_EQ(cells.back(), west) << "the agent never reached its new goal";
+  }
+}
+
+TEST(RotationPlanners, AnAgentWaitsBeforeItSetsOutForADeadEnd) {
+  // The goal is a dead end (one free neighbour): with dead-end-wait 5 the agent stands still for
+  // five steps, then goes; a goal with more neighbours is not deferred.
+  const Grid g = Grid::from_rows({"@@@@@@", "@....@", "@.@@.@", "@.@@@@"});
+  const Cell start = g.cell(1, 1), dead_end = g.cell(4, 2), open = g.cell(3, 1);
+  Params p;
+  p.set("dead-end-wait", "5");
+  const auto to_dead_end = lone_agent(g, p, start, kEast, [&](int) { return dead_end; }, 12);
+  for (int t = 0; t <= 5; ++t) EXPECT_EQ(to_dead_end[t], start) << "moved at step " << t;
+  EXPECT_EQ(to_dead_end.back(), dead_end);
+  const auto to_open = lone_agent(g, p, start, kEast, [&](int) { return open; }, 3);
+  EXPECT_EQ(to_open.back(), open);
+}
+
+TEST(RotationPlanners, CrowdedFleetsStayValidWithCommittedConfigurations) {
+  // The crowded-fleet rule's configuration (rotation-commit, dead-end-wait) on a map past 90% full:
+  // every step valid, and the fleet moves.
+  run_valid("gd-rhcr", "room-32-32-4.map", ActionModel::kRotation, 640, 60);
+  run_valid("pibt", "random-32-32-20.map", ActionModel::kRotation, 760, 60);
 }

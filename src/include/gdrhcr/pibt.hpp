@@ -63,6 +63,20 @@ struct PibtOptions {
   // agents back (a retreat costs turns); without it an agent heading into a dead end whose
   // occupant can leave only through its cell waits for ever, and the agents queued behind it.
   int rotation_swap_wait = 0;
+  // Rotation model, kCells, a call that moves the whole fleet: the configuration PIBT chose is
+  // carried out to the end before PIBT plans again. Agents that face their cell move, the others
+  // turn (at most two turns, then forward), and agents already in their cell wait for the rest;
+  // after at most three steps every agent stands where PIBT put it. Replanning after every action
+  // instead breaks a push chain whenever one of its agents must turn, and wastes the turns of
+  // agents that PIBT sends elsewhere next step. It pays only in packed crowds (after WPPL's
+  // executor for its densest instances, Jiang et al., arXiv 2404.16162): below about 80% of the
+  // free cells the others' waiting costs more (docs/results.md).
+  bool rotation_commit = false;
+  // Steps an agent whose goal is a dead end (a cell with one free neighbour) first waits where it
+  // stands, at the lowest priority, before it sets out for it (0 = never). In a packed crowd the
+  // occupants of a dead end can leave only through the cell the newcomer queues in (after WPPL,
+  // which parks such agents for good; here the goal is only deferred).
+  int dead_end_wait = 0;
 };
 
 // PIBT as published (the paper configuration and RHCR's fallback): no swap.
@@ -141,6 +155,9 @@ class PibtStep {
   bool can_swap(Cell pusher_at, Cell puller_at) const;
   int passable_neighbours(Cell at, Cell except, Cell* other) const;
   void update_priority(const WorldView& world, int i, Cell goal);
+  Cell goal_now(const WorldView& world, int i);
+  bool carry_on(const WorldView& world, std::vector<Cell>& next, const std::vector<int>& agents,
+                const std::vector<std::pair<Cell, Cell>>& fixed_moves);
   void update_standing(const WorldView& world, int i);
   bool swap_allowed(const WorldView& world, int ai) const;
 
@@ -160,6 +177,11 @@ class PibtStep {
   std::vector<Cell> standing_at_;
   std::vector<int> standing_t_;
   std::vector<uint8_t> swapping_;  // per agent: retreating with a swap partner (rotation model)
+  std::vector<Cell> target_;        // rotation_commit: the configuration being carried out
+  std::vector<Cell> origin_;        // ... and the cells it was planned from
+  int target_steps_ = 0;            // steps spent on it so far (0: none)
+  std::vector<Cell> waited_for_;    // dead_end_wait: the goal each agent's wait is for
+  std::vector<int> wait_until_;     // ... and the timestep it ends
   const std::vector<Cell>* preferred_ = nullptr;
   const std::vector<uint8_t>* immovable_ = nullptr;
   std::vector<int> order_;
