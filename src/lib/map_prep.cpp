@@ -73,9 +73,7 @@ MapPrep prepare_map(const Grid& grid, const PrepOptions& o) {
   p.width = grid.width(), p.height = grid.height(), p.agents = o.agents;
   p.model = o.model, p.planner = o.planner, p.step_budget_s = o.step_budget_s, p.seed = o.seed;
   p.seeds = o.seeds;
-  const bool crowded = crowded_fleet(MapFacts(grid, o.agents, o.model));
-  const std::vector<double> candidates =
-      crowded ? std::vector<double>{o.traffic_costs.front()} : o.traffic_costs;
+  const std::vector<double>& candidates = o.traffic_costs;
   // With a time limit the first trial runs for its share of it, and the others as many steps.
   const double share = o.time_limit_s > 0 ? o.time_limit_s / (double(candidates.size()) * o.seeds) : 0;
   p.trials.push_back(run_trial(grid, o, candidates.front(), o.seed, o.steps, share));

@@ -71,7 +71,7 @@ std::string rule_window(const std::string&, const MapFacts& f, const PlannerPara
 // rotation model. In the mapf model a robot backs out of an aisle in one step.
 std::string rule_lanes(const std::string& param, const MapFacts& f, const PlannerParams&) {
   if (param == "lanes")
-    return f.model() == ActionModel::kRotation && thousands(f) ? "lines" : "aisles";
+    return f.model() == ActionModel::kRotation && (thousands(f) || crowded_fleet(f)) ? "lines" : "aisles";
   return f.model() == ActionModel::kRotation ? "2" : "0";
 }
 std::string rule_far_cost(const std::string&, const MapFacts&, const PlannerParams& earlier) {
@@ -111,8 +111,8 @@ const std::vector<ParamRule>& param_rules() {
        std::string(kRulesFigure) + "guidance-window", rule_window},
       {"lanes",
        "rotation model: a forward move against a one-way lane costs 2 more (lane-cost 2; lanes.hpp); the lanes are "
-       "the map's one-cell aisles, and for fleets of more than 2,000 agents every row and column one can travel "
-       "along (lanes lines); mapf model: none",
+       "the map's one-cell aisles, and for fleets of more than 2,000 agents or holding more than 90% of the free "
+       "cells every row and column one can travel along (lanes lines); mapf model: none",
        std::string(kRulesFigure) + "lanes", rule_lanes},
       {"far-cost", "where the motion forecast runs, conflicts lg-near-steps or more ahead cost 2; else as lg-cost (-1)",
        std::string(kRulesFigure) + "far-cost", rule_far_cost},

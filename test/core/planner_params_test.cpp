@@ -107,6 +107,13 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
             "lines");
   EXPECT_EQ(PlannerParams::resolve("gd-rhcr", none, MapFacts(random, 2500, ActionModel::kMapf)).text("lanes"),
             "aisles");
+  // And a crowded fleet (over 90% of the free cells) of any size.
+  const int crowd = int(random.free_cells().size()) * 95 / 100;
+  EXPECT_EQ(PlannerParams::resolve("gd-rhcr", none, MapFacts(random, crowd, ActionModel::kRotation)).text("lanes"),
+            "lines");
+  EXPECT_EQ(PlannerParams::resolve("gd-rhcr", none, MapFacts(random, crowd * 8 / 10, ActionModel::kRotation))
+                .text("lanes"),
+            "aisles");
   // Rule guidance-off: a crowded fleet (over 90% of the free cells) in either model, and a fleet of
   // thousands in the rotation model only; the paper has no guidance.
   auto guidance = [&](const std::string& preset, int agents, ActionModel model) {

@@ -8,8 +8,8 @@
 // the loop, preparation runs the planner on the map itself, with the fleet's size and random
 // goals, once per candidate cost and seed, and keeps the one that reaches the most goals over the
 // seeds. The first candidate (none) is kept unless another beats it by kMargin, so noise does not
-// switch it; and it is the only one for a crowded fleet (rule crowded-fleet, planner_params.hpp),
-// where agents have no room to route around anything and short trials are noise.
+// switch it. A crowded fleet (rule crowded-fleet, planner_params.hpp) tries every candidate too:
+// once PIBT's configurations are carried out to the end, its trials are no longer noise.
 // The League's Start-Kit gives a preprocessing phase for such work (the LoRR adapter runs it
 // there, lorr_bridge.hpp); the ROS node and gdrhcr_sim load a file made by
 // `gdrhcr_sim --prepare`.
