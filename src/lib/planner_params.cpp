@@ -49,13 +49,13 @@ std::string rule_thousands(const std::string& param, const MapFacts& f, const Pl
 std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerParams&) {
   return !thousands(f) && many_cut_cells(f) ? "8" : "0";
 }
-// Fleets filling more than 90% of the free cells, in the rotation model: no agent retreats to let
-// another pass (the swap, after 20 steps standing), PIBT's configurations are carried out to the
-// end, and agents wait 500 steps before they set out for a dead end.
+// Fleets filling more than 90% of the free cells: agents wait 500 steps before they set out for a
+// dead end; in the rotation model no agent retreats to let another pass (the swap, after 20 steps
+// standing) and PIBT's configurations are carried out to the end.
 std::string rule_crowded(const std::string& param, const MapFacts& f, const PlannerParams&) {
   const bool crowded = crowded_fleet(f);
   if (param == "rotation-commit") return crowded && f.model() == ActionModel::kRotation ? "1" : "0";
-  if (param == "dead-end-wait") return crowded && f.model() == ActionModel::kRotation ? "500" : "0";
+  if (param == "dead-end-wait") return crowded ? "500" : "0";
   return crowded ? "0" : "20";  // rotation-swap-wait
 }
 // Guidance off where its paths cannot be followed: a crowded fleet, and in the rotation model a
@@ -96,9 +96,9 @@ const std::vector<ParamRule>& param_rules() {
        "none elsewhere or past 2,000 agents",
        std::string(kRulesFigure) + "motion-forecast", rule_forecast},
       {"crowded-fleet",
-       "in the rotation model, fleets holding more than 90% of the free cells: no agent retreats for another "
-       "(rotation-swap-wait 0, else 20 steps standing), PIBT's configurations are carried out to the end "
-       "(rotation-commit 1) and agents wait 500 steps before they set out for a dead end (dead-end-wait 500)",
+       "fleets holding more than 90% of the free cells: agents wait 500 steps before they set out for a dead end "
+       "(dead-end-wait 500); in the rotation model no agent retreats for another (rotation-swap-wait 0, else 20 "
+       "steps standing) and PIBT's configurations are carried out to the end (rotation-commit 1)",
        std::string(kRulesFigure) + "crowded-fleet", rule_crowded},
       {"guidance-off",
        "PIBT alone moves (guidance none) where guidance paths cannot be followed: fleets holding more than 90% of "

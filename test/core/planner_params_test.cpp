@@ -130,9 +130,8 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   EXPECT_EQ(guidance("default", 2500, ActionModel::kMapf), "local");
   EXPECT_EQ(guidance("default", free * 95 / 100, ActionModel::kMapf), "none");
   EXPECT_EQ(guidance("paper", 2500, ActionModel::kMapf), "none");
-  // Rule crowded-fleet: over 90% of the free cells in the rotation model, PIBT's configurations are
-  // carried out to the end and dead ends wait 500 steps; not below, not in the mapf model, not in
-  // the paper.
+  // Rule crowded-fleet: over 90% of the free cells dead ends wait 500 steps, and in the rotation
+  // model PIBT's configurations are carried out to the end; not below, not in the paper.
   auto crowded = [&](const std::string& preset, int agents, ActionModel model) {
     Params p;
     p.set("preset", preset);
@@ -141,7 +140,7 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   };
   EXPECT_EQ(crowded("default", free * 95 / 100, ActionModel::kRotation), std::pair(true, 500));
   EXPECT_EQ(crowded("default", free * 85 / 100, ActionModel::kRotation), std::pair(false, 0));
-  EXPECT_EQ(crowded("default", free * 95 / 100, ActionModel::kMapf), std::pair(false, 0));
+  EXPECT_EQ(crowded("default", free * 95 / 100, ActionModel::kMapf), std::pair(false, 500));
   EXPECT_EQ(crowded("paper", free * 95 / 100, ActionModel::kRotation), std::pair(false, 0));
   // Given values win over the preset and the rules, and say so.
   Params p;
