@@ -209,6 +209,24 @@ TEST(RotationPlanners, OperationsStopAtTheStepBudgetAndTheOthersWait) {
 }
 
 namespace {
+// One step of `planner` in the rotation model at timestep t, validated; advances pos and heads.
+// False (and a test failure) when the step is not valid.
+bool rotation_step(Planner& planner, const Grid& g, const DistTable& dist, StepValidator& validator, int t,
+                   const std::vector<std::vector<Cell>>& goals, std::vector<Cell>& pos, std::vector<Heading>& heads) {
+  WorldView w{g, dist, t, pos, goals};
+  w.action_model = ActionModel::kRotation;
+  std::vector<Heading> next_heads(pos.size(), kNoHeading);
+  w.headings = &heads;
+  w.next_headings = &next_heads;
+  std::vector<Cell> next(pos.size(), kNoCell);
+  planner.plan_step(w, next);
+  const auto bad = validator.check(pos, next, &heads, &next_heads);
+  EXPECT_FALSE(bad) << bad->describe(g, t);
+  if (bad) return false;
+  pos = next, heads = next_heads;
+  return true;
+}
+
 // A dead end D off a one-lane corridor with a junction two cells away: B stands in D and must
 // leave through the cell where A, which wants D, stands facing it. Returns the step by which both
 // reached their goals, or -1 within `steps`. PIBT's priorities of two agents that have not reached
@@ -225,17 +243,7 @@ int dead_end_meeting(uint64_t seed, const std::string& swap_wait, int steps) {
   const std::vector<std::vector<Cell>> goals = {{g.cell(1, 1)}, {g.cell(1, 4)}};
   bool reached[2] = {false, false};
   for (int t = 0; t < steps; ++t) {
-    WorldView w{g, dist, t, pos, goals};
-    w.action_model = ActionModel::kRotation;
-    std::vector<Heading> next_heads(2, kNoHeading);
-    w.headings = &heads;
-    w.next_headings = &next_heads;
-    std::vector<Cell> next(2, kNoCell);
-    planner->plan_step(w, next);
-    const auto bad = validator.check(pos, next, &heads, &next_heads);
-    EXPECT_FALSE(bad) << bad->describe(g, t);
-    if (bad) return -1;
-    pos = next, heads = next_heads;
+    if (!rotation_step(*planner, g, dist, validator, t, goals, pos, heads)) return -1;
     for (int i = 0; i < 2; ++i) reached[i] = reached[i] || pos[i] == goals[i][0];
     if (reached[0] && reached[1]) return t + 1;
   }
@@ -268,17 +276,7 @@ std::vector<Cell> lone_agent(const Grid& g, Params params, Cell start, Heading h
   std::vector<Cell> pos = {start}, cells = {start};
   std::vector<Heading> heads = {heading};
   for (int t = 0; t < steps; ++t) {
-    const std::vector<std::vector<Cell>> goals = {{goal_at(t)}};
-    WorldView w{g, dist, t, pos, goals};
-    w.action_model = ActionModel::kRotation;
-    std::vector<Heading> next_heads(1, kNoHeading);
-    w.headings = &heads;
-    w.next_headings = &next_heads;
-    std::vector<Cell> next(1, kNoCell);
-    planner->plan_step(w, next);
-    const auto bad = validator.check(pos, next, &heads, &next_heads);
-    EXPECT_FALSE(bad) << bad->describe(g, t);
-    pos = next, heads = next_heads;
+    if (!rotation_step(*planner, g, dist, validator, t, {{goal_at(t)}}, pos, heads)) break;
     cells.push_back(pos[0]);
   }
   return cells;
