@@ -47,9 +47,10 @@ Cell PibtStep::goal_now(const WorldView& world, int i) {
   const Cell here = world.positions[i];
   const Cell g = world.goals[i].empty() ? here : world.goals[i][0];
   if (opt_.dead_end_wait <= 0 || g == here) return g;
-  if (waited_for_.size() < priority_.size()) waited_for_.resize(priority_.size(), kNoCell), wait_until_.resize(priority_.size(), 0);
   const auto nb = grid_.neighbours(g);
   if (nb.end() - nb.begin() > 1) return g;
+  if (waited_for_.size() < priority_.size())
+    waited_for_.resize(priority_.size(), kNoCell), wait_until_.resize(priority_.size(), 0);
   if (waited_for_[i] != g) waited_for_[i] = g, wait_until_[i] = world.timestep + opt_.dead_end_wait;
   return world.timestep < wait_until_[i] ? here : g;
 }
