@@ -83,10 +83,9 @@ TEST(MapPrep, TrialsPickTheCostThatReachesMostGoalsAndTheFileRoundTrips) {
   std::remove(path.c_str());
 }
 
-// A crowded fleet (rule crowded-fleet: more than 90% of the free cells) keeps the first candidate:
-// it is the only one tried.
+// A crowded fleet (rule crowded-fleet: more than 90% of the free cells, here 14 agents on 15
+// cells) runs each candidate on each seed, as any fleet does.
 TEST(MapPrep, ACrowdedFleetTriesEveryCandidate) {
-  // 14 agents on 15 cells (rule crowded-fleet): each candidate runs on each seed, as for any fleet.
   const Grid g = Grid::from_rows({".....", ".....", "....."});
   PrepOptions o;
   o.agents = 14;
