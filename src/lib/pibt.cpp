@@ -57,14 +57,14 @@ Cell PibtStep::goal_now(const WorldView& world, int i) {
 
 // rotation_commit: while the configuration chosen earlier is not reached (and for at most three
 // steps), this step carries on towards it instead of planning a new one; a new configuration
-// becomes the target. Only for a call that moves the whole fleet, with nothing fixed or blocked.
+// becomes the target. Only for a call that moves the whole fleet (order_ holds every agent), with
+// nothing fixed or blocked.
 // Returns true when `next` holds the step carried on.
-bool PibtStep::carry_on(const WorldView& world, std::vector<Cell>& next, const std::vector<int>& agents,
+bool PibtStep::carry_on(const WorldView& world, std::vector<Cell>& next,
                         const std::vector<std::pair<Cell, Cell>>& fixed_moves) {
   const int n = world.num_agents();
   const bool whole = opt_.rotation_commit && world.rotation() && static_cast<int>(order_.size()) == n &&
-                     (agents.empty() || static_cast<int>(agents.size()) == n) && fixed_moves.empty() &&
-                     !world.immovable && !(world.blocked && !world.blocked->empty());
+                     fixed_moves.empty() && !world.immovable && !(world.blocked && !world.blocked->empty());
   if (!whole) {
     target_steps_ = 0;
     return false;
@@ -75,16 +75,15 @@ bool PibtStep::carry_on(const WorldView& world, std::vector<Cell>& next, const s
     arrived = arrived && world.positions[i] == target_[i];
     going = world.positions[i] == target_[i] || world.positions[i] == origin_[i];
   }
-  if (!going || arrived) {  // plan a new configuration and take its first step
+  if (!going || arrived) {  // plan a new configuration
     push_all(world, next, fixed_moves);
     target_.assign(next.begin(), next.begin() + n);
     origin_ = world.positions;
-    target_steps_ = 1;
-    execute_with_turns(world, next);
-    return true;
+    target_steps_ = 0;
+  } else {
+    for (int i : order_) occupied_now_[world.positions[i]] = kFree;
+    std::copy(target_.begin(), target_.end(), next.begin());
   }
-  for (int i : order_) occupied_now_[world.positions[i]] = kFree;
-  std::copy(target_.begin(), target_.end(), next.begin());
   ++target_steps_;
   execute_with_turns(world, next);
   return true;
@@ -146,7 +145,7 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   if (world.rotation() && opt_.rotation == PibtOptions::Rotation::kOperations) {
     plan_operations(world, next, fixed_moves);
     for (int i : order_) occupied_now_[world.positions[i]] = kFree;
-  } else if (!carry_on(world, next, agents, fixed_moves)) {
+  } else if (!carry_on(world, next, fixed_moves)) {
     push_all(world, next, fixed_moves);
     if (world.rotation()) execute_with_turns(world, next);
   }

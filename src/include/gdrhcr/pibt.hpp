@@ -156,7 +156,7 @@ class PibtStep {
   int passable_neighbours(Cell at, Cell except, Cell* other) const;
   void update_priority(const WorldView& world, int i, Cell goal);
   Cell goal_now(const WorldView& world, int i);
-  bool carry_on(const WorldView& world, std::vector<Cell>& next, const std::vector<int>& agents,
+  bool carry_on(const WorldView& world, std::vector<Cell>& next,
                 const std::vector<std::pair<Cell, Cell>>& fixed_moves);
   void update_standing(const WorldView& world, int i);
   bool swap_allowed(const WorldView& world, int ai) const;
