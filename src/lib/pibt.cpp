@@ -89,6 +89,34 @@ bool PibtStep::carry_on(const WorldView& world, std::vector<Cell>& next,
   return true;
 }
 
+// rotation_keep: the preferred cells of this call, each agent's kept cell where the caller gives
+// none. A cell is kept for the next step only, by an agent still in the same cell with the same
+// goal, and not while the agent may swap (its retreat must not be taken for its goal).
+const std::vector<Cell>* PibtStep::with_kept_cells(const WorldView& world, const std::vector<Cell>* preferred) {
+  const size_t n = world.num_agents();
+  if (kept_.size() < n)
+    kept_.resize(n, kNoCell), kept_from_.resize(n, kNoCell), kept_goal_.resize(n, kNoCell),
+        kept_t_.resize(n, std::numeric_limits<int>::min()), kept_pref_.resize(n, kNoCell);
+  for (int i : order_) {
+    const Cell given = preferred ? (*preferred)[i] : kNoCell;
+    const bool keep = kept_t_[i] == world.timestep - 1 && kept_from_[i] == world.positions[i] &&
+                      kept_goal_[i] == goal_of_[i] && !swap_allowed(world, i);
+    kept_pref_[i] = given != kNoCell ? given : keep ? kept_[i] : kNoCell;
+  }
+  return &kept_pref_;
+}
+
+// After the step is executed with turns: the cells chosen_ holds that agents did not get to.
+void PibtStep::keep_unreached_cells(const WorldView& world, const std::vector<Cell>& next) {
+  for (int i : order_) {
+    const Cell c = chosen_[i];
+    kept_[i] = c != world.positions[i] && next[i] != c ? c : kNoCell;
+    kept_from_[i] = world.positions[i];
+    kept_goal_[i] = goal_of_[i];
+    kept_t_[i] = world.timestep;
+  }
+}
+
 // Steps the agent has stood in its cell; a second call in the same timestep changes nothing.
 void PibtStep::update_standing(const WorldView& world, int i) {
   if (standing_t_[i] == world.timestep) return;
@@ -146,8 +174,14 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
     plan_operations(world, next, fixed_moves);
     for (int i : order_) occupied_now_[world.positions[i]] = kFree;
   } else if (!carry_on(world, next, fixed_moves)) {
+    const bool keep = opt_.rotation_keep && world.rotation();
+    if (keep) preferred_ = with_kept_cells(world, preferred);
     push_all(world, next, fixed_moves);
-    if (world.rotation()) execute_with_turns(world, next);
+    if (world.rotation()) {
+      if (keep) chosen_ = next;
+      execute_with_turns(world, next);
+      if (keep) keep_unreached_cells(world, next);
+    }
   }
   preferred_ = nullptr;
   immovable_ = nullptr;

@@ -157,6 +157,10 @@ std::vector<ParamSpec> pibt_rows() {
           flag("rotation-commit", "",
                "rotation model, cells: carry out each configuration PIBT chooses for the whole fleet (turns, then "
                "moves; agents that arrived wait) before planning the next", "0", "crowded-fleet"),
+          flag("rotation-keep", "1",
+               "rotation model, cells: an agent that did not get to the cell PIBT chose for it (it turned towards "
+               "it, or waited for the agent in it) tries that cell first at the next step, unless guidance gives "
+               "it one", "0"),
           integer("dead-end-wait", 0, 1000000, "",
                   "steps an agent whose goal is a dead end (one free neighbour) waits where it stands before it sets "
                   "out for it (0 = never)",

@@ -212,8 +212,9 @@ namespace {
 // One step of `planner` in the rotation model at timestep t, validated; advances pos and heads.
 // False (and a test failure) when the step is not valid.
 bool rotation_step(Planner& planner, const Grid& g, const DistTable& dist, StepValidator& validator, int t,
-                   const std::vector<std::vector<Cell>>& goals, std::vector<Cell>& pos, std::vector<Heading>& heads) {
-  WorldView w{g, dist, t, pos, goals};
+                   const std::vector<std::vector<Cell>>& goals, std::vector<Cell>& pos, std::vector<Heading>& heads,
+                   const std::vector<Cell>* blocked = nullptr) {
+  WorldView w{g, dist, t, pos, goals, nullptr, blocked};
   w.action_model = ActionModel::kRotation;
   std::vector<Heading> next_heads(pos.size(), kNoHeading);
   w.headings = &heads;
@@ -298,6 +299,43 @@ TEST(RotationPlanners, ACommittedConfigurationIsCarriedOutBeforePibtPlansAgain) 
     const bool went_east = std::find(cells.begin(), cells.end(), east) != cells.end();
     EXPECT_EQ(went_east, std::string(commit) == "1");
     EXPECT_EQ(cells.back(), west) << "the agent never reached its new goal";
+  }
+}
+
+TEST(RotationPlanners, AnAgentKeepsTheCellItTurnedTowards) {
+  // P pushes A out of its cell while the cell east of A is blocked: A turns north or south and
+  // stays, so P waits. At the next step the east is free and nearer A's goal. Without
+  // rotation-keep A turns back east (its turn is wasted and P waits again); with it A goes on into
+  // the cell it turned towards and P follows.
+  const Grid g = Grid::from_rows({".......", ".......", ".......", ".......", "......."});
+  const Cell p_at = g.cell(1, 2), a_at = g.cell(2, 2), east = g.cell(3, 2);
+  for (const char* keep : {"0", "1"}) {
+    SCOPED_TRACE(std::string("rotation-keep ") + keep);
+    Params params;
+    params.set("rotation-keep", keep);
+    DistTable dist(g, ActionModel::kRotation);
+    auto planner = make_planner("pibt", params, g, 2, 1, ActionModel::kRotation);
+    StepValidator validator(g, ActionModel::kRotation);
+    std::vector<Cell> pos = {p_at, a_at};
+    std::vector<Heading> heads = {kEast, kEast};
+    // Step 0 (not carried out) sets the priorities: A's goal changes at step 1, as when an agent
+    // reaches one, so P decides first from then on.
+    std::vector<Cell> pos0 = pos;
+    std::vector<Heading> heads0 = heads;
+    ASSERT_TRUE(rotation_step(*planner, g, dist, validator, 0, {{g.cell(6, 2)}, {g.cell(2, 0)}}, pos0, heads0));
+    const std::vector<std::vector<Cell>> goals = {{g.cell(6, 2)}, {g.cell(4, 2)}};
+    const std::vector<Cell> blocked = {east};
+    ASSERT_TRUE(rotation_step(*planner, g, dist, validator, 1, goals, pos, heads, &blocked));
+    ASSERT_EQ(pos, (std::vector<Cell>{p_at, a_at}));
+    ASSERT_TRUE(heads[1] == kNorth || heads[1] == kSouth) << "A did not turn away from the blocked cell";
+    const Cell turned_to = forward_cell(g, a_at, heads[1]);
+    ASSERT_TRUE(rotation_step(*planner, g, dist, validator, 2, goals, pos, heads));
+    if (std::string(keep) == "1") {
+      EXPECT_EQ(pos, (std::vector<Cell>{a_at, turned_to}));
+    } else {
+      EXPECT_EQ(pos, (std::vector<Cell>{p_at, a_at}));
+      EXPECT_EQ(heads[1], kEast);
+    }
   }
 }
 

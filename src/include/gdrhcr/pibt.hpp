@@ -72,6 +72,12 @@ struct PibtOptions {
   // executor for its densest instances, Jiang et al., arXiv 2404.16162): below about 80% of the
   // free cells the others' waiting costs more (docs/results.md).
   bool rotation_commit = false;
+  // Rotation model, kCells: an agent that did not get to the cell PIBT chose for it (it turned
+  // towards it, or waited for the agent in it) tries that cell first at the next step, unless the
+  // caller prefers another (guidance). Replanning from scratch otherwise sends it, now that it faces
+  // the cell, elsewhere as often as not, and the turn and the agents queued behind it lose a step
+  // (the root of most waits in the jams of fleets of thousands; docs/results.md, session 17).
+  bool rotation_keep = false;
   // Steps an agent whose goal is a dead end (a cell with one free neighbour) first waits where it
   // stands, at the lowest priority, before it sets out for it (0 = never). In a packed crowd the
   // occupants of a dead end can leave only through the cell the newcomer queues in (after WPPL,
@@ -156,6 +162,8 @@ class PibtStep {
   int passable_neighbours(Cell at, Cell except, Cell* other) const;
   void update_priority(const WorldView& world, int i, Cell goal);
   Cell goal_now(const WorldView& world, int i);
+  const std::vector<Cell>* with_kept_cells(const WorldView& world, const std::vector<Cell>* preferred);
+  void keep_unreached_cells(const WorldView& world, const std::vector<Cell>& next);
   bool carry_on(const WorldView& world, std::vector<Cell>& next,
                 const std::vector<std::pair<Cell, Cell>>& fixed_moves);
   void update_standing(const WorldView& world, int i);
@@ -177,6 +185,9 @@ class PibtStep {
   std::vector<Cell> standing_at_;
   std::vector<int> standing_t_;
   std::vector<uint8_t> swapping_;  // per agent: retreating with a swap partner (rotation model)
+  std::vector<Cell> kept_, kept_from_, kept_goal_;  // rotation_keep: per agent, the cell it did not get to,
+  std::vector<int> kept_t_;                         // from where, for which goal and at which step
+  std::vector<Cell> chosen_, kept_pref_;            // this call's chosen cells; preferred cells with the kept ones
   std::vector<Cell> target_;        // rotation_commit: the configuration being carried out
   std::vector<Cell> origin_;        // ... and the cells it was planned from
   int target_steps_ = 0;            // steps spent on it so far (0: none)
