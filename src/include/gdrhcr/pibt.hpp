@@ -74,8 +74,8 @@ struct PibtOptions {
   bool rotation_commit = false;
   // Rotation model, kCells: an agent that did not get to the cell PIBT chose for it (it turned
   // towards it, or waited for the agent in it) tries that cell first at the next step, unless the
-  // caller prefers another (guidance). Replanning from scratch otherwise sends it, now that it faces
-  // the cell, elsewhere as often as not, and the turn and the agents queued behind it lose a step
+  // caller prefers another (guidance). Replanning from scratch otherwise often sends it, now that it
+  // faces the cell, elsewhere, and the turn and the agents queued behind it lose a step
   // (the root of most waits in the jams of fleets of thousands; docs/results.md, session 17).
   bool rotation_keep = false;
   // Steps an agent whose goal is a dead end (a cell with one free neighbour) first waits where it
