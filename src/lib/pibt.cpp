@@ -106,10 +106,11 @@ const std::vector<Cell>* PibtStep::with_kept_cells(const WorldView& world, const
   return &kept_pref_;
 }
 
-// After the step is executed with turns: the cells chosen_ holds that agents did not get to.
+// After the step is executed with turns: of the cells PIBT chose (in kept_ since before the
+// execution), those agents did not get to.
 void PibtStep::keep_unreached_cells(const WorldView& world, const std::vector<Cell>& next) {
   for (int i : order_) {
-    const Cell c = chosen_[i];
+    const Cell c = kept_[i];
     kept_[i] = c != world.positions[i] && next[i] != c ? c : kNoCell;
     kept_from_[i] = world.positions[i];
     kept_goal_[i] = goal_of_[i];
@@ -178,7 +179,8 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
     if (keep) preferred_ = with_kept_cells(world, preferred);
     push_all(world, next, fixed_moves);
     if (world.rotation()) {
-      if (keep) chosen_ = next;
+      if (keep)
+        for (int i : order_) kept_[i] = next[i];  // the chosen cells, until keep_unreached_cells
       execute_with_turns(world, next);
       if (keep) keep_unreached_cells(world, next);
     }

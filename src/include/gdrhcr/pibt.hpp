@@ -187,7 +187,7 @@ class PibtStep {
   std::vector<uint8_t> swapping_;  // per agent: retreating with a swap partner (rotation model)
   std::vector<Cell> kept_, kept_from_, kept_goal_;  // rotation_keep: per agent, the cell it did not get to,
   std::vector<int> kept_t_;                         // from where, for which goal and at which step
-  std::vector<Cell> chosen_, kept_pref_;            // this call's chosen cells; preferred cells with the kept ones
+  std::vector<Cell> kept_pref_;                     // this call's preferred cells, with the kept ones
   std::vector<Cell> target_;        // rotation_commit: the configuration being carried out
   std::vector<Cell> origin_;        // ... and the cells it was planned from
   int target_steps_ = 0;            // steps spent on it so far (0: none)
