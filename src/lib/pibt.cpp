@@ -239,8 +239,10 @@ void PibtStep::execute_with_turns(const WorldView& world, std::vector<Cell>& nex
 // kCells in the rotation model: candidates by the distance with turns after the move (from the
 // heading it leaves the agent in) plus the quarter turns it takes and the step itself (staying:
 // a step), the preferred cell first; among equals the fewest turns, then (kFreeFirst) a cell
-// nobody stands on, then at random.
-void PibtStep::order_candidates_with_turns(const WorldView& world, int ai, Cell* cand, int m) {
+// nobody stands on, then at random. Without rotation_commit, a pushed agent pays
+// rotation_push_turn_cost more for a cell it must turn towards: it stays this step, and so does its
+// pusher.
+void PibtStep::order_candidates_with_turns(const WorldView& world, int ai, bool pushed, Cell* cand, int m) {
   const DistRow& row = *rows_[ai];
   const Cell pref = preferred_ ? (*preferred_)[ai] : kNoCell;
   const Pose at = world.pose(ai);
@@ -251,7 +253,8 @@ void PibtStep::order_candidates_with_turns(const WorldView& world, int ai, Cell*
     const Cell c = cand[k];
     const Heading h = c == at.cell ? at.heading : heading_of_move(grid_, at.cell, c);
     const int turns = turn_steps(at.heading, h);
-    const long long cost = std::min(row.at(c, h), 1 << 24) + turns + 1;
+    const int pusher_waits = pushed && turns > 0 && !opt_.rotation_commit ? opt_.rotation_push_turn_cost : 0;
+    const long long cost = std::min(row.at(c, h), 1 << 24) + turns + 1 + pusher_waits;
     key[k] = (c == pref ? 0LL : 1LL << 40) + cost * 8 + turns * 2 + (free_first && occupied_now_[c] != kFree ? 1 : 0);
   }
   for (int k = 1; k < m; ++k)
@@ -260,8 +263,8 @@ void PibtStep::order_candidates_with_turns(const WorldView& world, int ai, Cell*
 
 // Candidates: the neighbours and staying put, the preferred cell first, then nearest to the
 // goal; among equals (tie_break kFreeFirst) a cell nobody stands on, then a random order.
-void PibtStep::order_candidates(const WorldView& world, int ai, Cell* cand, int m) {
-  if (world.rotation()) return order_candidates_with_turns(world, ai, cand, m);
+void PibtStep::order_candidates(const WorldView& world, int ai, bool pushed, Cell* cand, int m) {
+  if (world.rotation()) return order_candidates_with_turns(world, ai, pushed, cand, m);
   const DistRow& row = *rows_[ai];
   const Cell pref = preferred_ ? (*preferred_)[ai] : kNoCell;
   std::shuffle(cand, cand + m, rng_);
@@ -284,7 +287,7 @@ bool PibtStep::push(const WorldView& world, int ai, int aj, std::vector<Cell>& n
   int m = 0;
   for (Cell c : grid_.neighbours(here)) cand[m++] = c;
   cand[m++] = here;
-  order_candidates(world, ai, cand, m);
+  order_candidates(world, ai, aj >= 0, cand, m);
   // Swap: the agent on the best cell must get past this one; walk away and pull it along.
   int partner = -1;
   if (swap_allowed(world, ai)) {

@@ -161,6 +161,10 @@ std::vector<ParamSpec> pibt_rows() {
                "rotation model, cells: an agent that did not get to the cell PIBT chose for it (it turned towards "
                "it, or waited for the agent in it) tries that cell first at the next step, unless guidance gives "
                "it one", "0"),
+          integer("rotation-push-turn-cost", 0, 64, "2",
+                  "rotation model, cells, without rotation-commit: extra cost, for an agent pushed by another, of "
+                  "a cell it must turn towards (it stays, and so does its pusher)",
+                  "", "0"),
           integer("dead-end-wait", 0, 1000000, "",
                   "steps an agent whose goal is a dead end (one free neighbour) waits where it stands before it sets "
                   "out for it (0 = never)",

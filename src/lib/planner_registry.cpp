@@ -23,6 +23,7 @@ PibtOptions pibt_options(const PlannerParams& v) {
   o.rotation_swap_wait = v.integer("rotation-swap-wait");
   o.rotation_commit = v.flag("rotation-commit");
   o.rotation_keep = v.flag("rotation-keep");
+  o.rotation_push_turn_cost = v.integer("rotation-push-turn-cost");
   o.dead_end_wait = v.integer("dead-end-wait");
   return o;
 }

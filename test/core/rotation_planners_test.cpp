@@ -339,6 +339,37 @@ TEST(RotationPlanners, AnAgentKeepsTheCellItTurnedTowards) {
   }
 }
 
+TEST(RotationPlanners, APushedAgentLeavesStraightAheadRatherThanTurning) {
+  // P, facing east, pushes A out of its cell. A's goal is up and to the west: turning north is
+  // two steps shorter for A than going straight on east. Turning, A stays this step and so does P;
+  // with rotation-push-turn-cost 2 the turn costs A as much as the longer way, and the tie goes to
+  // the move straight ahead, so both move at once.
+  const Grid g = Grid::from_rows({".......", ".......", ".......", ".......", "......."});
+  const Cell p_at = g.cell(1, 2), a_at = g.cell(2, 2), ahead = g.cell(3, 2);
+  for (const char* cost : {"0", "2"}) {
+    SCOPED_TRACE(std::string("rotation-push-turn-cost ") + cost);
+    Params params;
+    params.set("rotation-push-turn-cost", cost);
+    DistTable dist(g, ActionModel::kRotation);
+    auto planner = make_planner("pibt", params, g, 2, 1, ActionModel::kRotation);
+    StepValidator validator(g, ActionModel::kRotation);
+    std::vector<Cell> pos = {p_at, a_at};
+    std::vector<Heading> heads = {kEast, kEast};
+    // Step 0 (not carried out) sets the priorities: A's goal changes at step 1, so P decides first.
+    std::vector<Cell> pos0 = pos;
+    std::vector<Heading> heads0 = heads;
+    ASSERT_TRUE(rotation_step(*planner, g, dist, validator, 0, {{g.cell(6, 2)}, {g.cell(6, 0)}}, pos0, heads0));
+    const std::vector<std::vector<Cell>> goals = {{g.cell(6, 2)}, {g.cell(1, 0)}};
+    ASSERT_TRUE(rotation_step(*planner, g, dist, validator, 1, goals, pos, heads));
+    if (std::string(cost) == "0") {
+      EXPECT_EQ(pos, (std::vector<Cell>{p_at, a_at})) << "P should wait while A turns";
+      EXPECT_EQ(heads[1], kNorth);
+    } else {
+      EXPECT_EQ(pos, (std::vector<Cell>{a_at, ahead})) << "A should leave straight ahead, and P follow";
+    }
+  }
+}
+
 TEST(RotationPlanners, AnAgentWaitsBeforeItSetsOutForADeadEnd) {
   // The goal is a dead end (one free neighbour): with dead-end-wait 5 the agent stands still for
   // five steps, then goes; a goal with more neighbours is not deferred.

@@ -78,6 +78,11 @@ struct PibtOptions {
   // faces the cell, elsewhere, and the turn and the agents queued behind it lose a step
   // (the root of most waits in the jams of fleets of thousands; docs/results.md, session 17).
   bool rotation_keep = false;
+  // Rotation model, kCells, without rotation_commit: a pushed agent pays this
+  // much more for a cell it must turn towards than for one it faces. A turning agent stays, and
+  // its pusher, and the agents queued behind, stay with it; a cell straight ahead lets the chain
+  // move now (docs/results.md, session 18).
+  int rotation_push_turn_cost = 0;
   // Steps an agent whose goal is a dead end (a cell with one free neighbour) first waits where it
   // stands, at the lowest priority, before it sets out for it (0 = never). In a packed crowd the
   // occupants of a dead end can leave only through the cell the newcomer queues in (after WPPL,
@@ -149,11 +154,11 @@ class PibtStep {
   long op_plans_ = 0;
   std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
   long deadline_stops_ = 0;
-  void order_candidates(const WorldView& world, int ai, Cell* cand, int m);
+  void order_candidates(const WorldView& world, int ai, bool pushed, Cell* cand, int m);
   void push_all(const WorldView& world, std::vector<Cell>& next,
                 const std::vector<std::pair<Cell, Cell>>& fixed_moves);
   void execute_with_turns(const WorldView& world, std::vector<Cell>& next) const;
-  void order_candidates_with_turns(const WorldView& world, int ai, Cell* cand, int m);
+  void order_candidates_with_turns(const WorldView& world, int ai, bool pushed, Cell* cand, int m);
   int swap_partner(const WorldView& world, int ai, Cell best) const;
   void retreat_order(Cell here, Cell* cand, int m) const;
   bool needs_swap(Cell pusher_at, Cell puller_at, const DistRow& pusher_row,
