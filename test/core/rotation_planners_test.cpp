@@ -302,39 +302,54 @@ TEST(RotationPlanners, ACommittedConfigurationIsCarriedOutBeforePibtPlansAgain) 
   }
 }
 
+namespace {
+// P at (1, 2) behind A at (2, 2), both facing east on an open 7x5 grid, PIBT with `params` in the
+// rotation model, P's goal at (6, 2). Step 0 (not carried out) sets the priorities: A's goal
+// changes at step 1, as when an agent reaches one, so P decides first from then on and pushes A.
+struct PusherAndPushed {
+  Grid g = Grid::from_rows({".......", ".......", ".......", ".......", "......."});
+  Cell p_at = g.cell(1, 2), a_at = g.cell(2, 2), p_goal = g.cell(6, 2);
+  DistTable dist{g, ActionModel::kRotation};
+  StepValidator validator{g, ActionModel::kRotation};
+  std::unique_ptr<Planner> planner;
+  std::vector<Cell> pos{p_at, a_at};
+  std::vector<Heading> heads{kEast, kEast};
+
+  PusherAndPushed(Params params, int a_goal_x, int a_goal_y)
+      : planner(make_planner("pibt", params, g, 2, 1, ActionModel::kRotation)) {
+    std::vector<Cell> pos0 = pos;
+    std::vector<Heading> heads0 = heads;
+    EXPECT_TRUE(rotation_step(*planner, g, dist, validator, 0, {{p_goal}, {g.cell(a_goal_x, a_goal_y)}}, pos0, heads0));
+  }
+  bool step(int t, const std::vector<std::vector<Cell>>& goals, const std::vector<Cell>* blocked = nullptr) {
+    return rotation_step(*planner, g, dist, validator, t, goals, pos, heads, blocked);
+  }
+};
+}  // namespace
+
 TEST(RotationPlanners, AnAgentKeepsTheCellItTurnedTowards) {
   // P pushes A out of its cell while the cell east of A is blocked: A turns north or south and
   // stays, so P waits. At the next step the east is free and nearer A's goal. Without
   // rotation-keep A turns back east (its turn is wasted and P waits again); with it A goes on into
   // the cell it turned towards and P follows.
-  const Grid g = Grid::from_rows({".......", ".......", ".......", ".......", "......."});
-  const Cell p_at = g.cell(1, 2), a_at = g.cell(2, 2), east = g.cell(3, 2);
   for (const char* keep : {"0", "1"}) {
     SCOPED_TRACE(std::string("rotation-keep ") + keep);
     Params params;
     params.set("rotation-keep", keep);
-    DistTable dist(g, ActionModel::kRotation);
-    auto planner = make_planner("pibt", params, g, 2, 1, ActionModel::kRotation);
-    StepValidator validator(g, ActionModel::kRotation);
-    std::vector<Cell> pos = {p_at, a_at};
-    std::vector<Heading> heads = {kEast, kEast};
-    // Step 0 (not carried out) sets the priorities: A's goal changes at step 1, as when an agent
-    // reaches one, so P decides first from then on.
-    std::vector<Cell> pos0 = pos;
-    std::vector<Heading> heads0 = heads;
-    ASSERT_TRUE(rotation_step(*planner, g, dist, validator, 0, {{g.cell(6, 2)}, {g.cell(2, 0)}}, pos0, heads0));
-    const std::vector<std::vector<Cell>> goals = {{g.cell(6, 2)}, {g.cell(4, 2)}};
-    const std::vector<Cell> blocked = {east};
-    ASSERT_TRUE(rotation_step(*planner, g, dist, validator, 1, goals, pos, heads, &blocked));
-    ASSERT_EQ(pos, (std::vector<Cell>{p_at, a_at}));
-    ASSERT_TRUE(heads[1] == kNorth || heads[1] == kSouth) << "A did not turn away from the blocked cell";
-    const Cell turned_to = forward_cell(g, a_at, heads[1]);
-    ASSERT_TRUE(rotation_step(*planner, g, dist, validator, 2, goals, pos, heads));
+    PusherAndPushed w(params, 2, 0);
+    const Grid& g = w.g;
+    const std::vector<std::vector<Cell>> goals = {{w.p_goal}, {g.cell(4, 2)}};
+    const std::vector<Cell> blocked = {g.cell(3, 2)};
+    ASSERT_TRUE(w.step(1, goals, &blocked));
+    ASSERT_EQ(w.pos, (std::vector<Cell>{w.p_at, w.a_at}));
+    ASSERT_TRUE(w.heads[1] == kNorth || w.heads[1] == kSouth) << "A did not turn away from the blocked cell";
+    const Cell turned_to = forward_cell(g, w.a_at, w.heads[1]);
+    ASSERT_TRUE(w.step(2, goals));
     if (std::string(keep) == "1") {
-      EXPECT_EQ(pos, (std::vector<Cell>{a_at, turned_to}));
+      EXPECT_EQ(w.pos, (std::vector<Cell>{w.a_at, turned_to}));
     } else {
-      EXPECT_EQ(pos, (std::vector<Cell>{p_at, a_at}));
-      EXPECT_EQ(heads[1], kEast);
+      EXPECT_EQ(w.pos, (std::vector<Cell>{w.p_at, w.a_at}));
+      EXPECT_EQ(w.heads[1], kEast);
     }
   }
 }
@@ -344,28 +359,17 @@ TEST(RotationPlanners, APushedAgentLeavesStraightAheadRatherThanTurning) {
   // two steps shorter for A than going straight on east. Turning, A stays this step and so does P;
   // with rotation-push-turn-cost 2 the turn costs A as much as the longer way, and the tie goes to
   // the move straight ahead, so both move at once.
-  const Grid g = Grid::from_rows({".......", ".......", ".......", ".......", "......."});
-  const Cell p_at = g.cell(1, 2), a_at = g.cell(2, 2), ahead = g.cell(3, 2);
   for (const char* cost : {"0", "2"}) {
     SCOPED_TRACE(std::string("rotation-push-turn-cost ") + cost);
     Params params;
     params.set("rotation-push-turn-cost", cost);
-    DistTable dist(g, ActionModel::kRotation);
-    auto planner = make_planner("pibt", params, g, 2, 1, ActionModel::kRotation);
-    StepValidator validator(g, ActionModel::kRotation);
-    std::vector<Cell> pos = {p_at, a_at};
-    std::vector<Heading> heads = {kEast, kEast};
-    // Step 0 (not carried out) sets the priorities: A's goal changes at step 1, so P decides first.
-    std::vector<Cell> pos0 = pos;
-    std::vector<Heading> heads0 = heads;
-    ASSERT_TRUE(rotation_step(*planner, g, dist, validator, 0, {{g.cell(6, 2)}, {g.cell(6, 0)}}, pos0, heads0));
-    const std::vector<std::vector<Cell>> goals = {{g.cell(6, 2)}, {g.cell(1, 0)}};
-    ASSERT_TRUE(rotation_step(*planner, g, dist, validator, 1, goals, pos, heads));
+    PusherAndPushed w(params, 6, 0);
+    ASSERT_TRUE(w.step(1, {{w.p_goal}, {w.g.cell(1, 0)}}));
     if (std::string(cost) == "0") {
-      EXPECT_EQ(pos, (std::vector<Cell>{p_at, a_at})) << "P should wait while A turns";
-      EXPECT_EQ(heads[1], kNorth);
+      EXPECT_EQ(w.pos, (std::vector<Cell>{w.p_at, w.a_at})) << "P should wait while A turns";
+      EXPECT_EQ(w.heads[1], kNorth);
     } else {
-      EXPECT_EQ(pos, (std::vector<Cell>{a_at, ahead})) << "A should leave straight ahead, and P follow";
+      EXPECT_EQ(w.pos, (std::vector<Cell>{w.a_at, w.g.cell(3, 2)})) << "A should leave straight ahead, and P follow";
     }
   }
 }
