@@ -78,10 +78,10 @@ struct PibtOptions {
   // faces the cell, elsewhere, and the turn and the agents queued behind it lose a step
   // (the root of most waits in the jams of fleets of thousands; docs/results.md, session 17).
   bool rotation_keep = false;
-  // Rotation model, kCells, without rotation_commit: a pushed agent pays this
-  // much more for a cell it must turn towards than for one it faces. A turning agent stays, and
-  // its pusher, and the agents queued behind, stay with it; a cell straight ahead lets the chain
-  // move now (docs/results.md, session 18).
+  // Rotation model, kCells, without rotation_commit: a pushed agent pays this much more for a
+  // cell it must turn towards than for one it faces. A turning agent stays, and its pusher and the
+  // agents queued behind stay with it; a cell straight ahead lets the chain move now
+  // (docs/results.md, session 18).
   int rotation_push_turn_cost = 0;
   // Steps an agent whose goal is a dead end (a cell with one free neighbour) first waits where it
   // stands, at the lowest priority, before it sets out for it (0 = never). In a packed crowd the
