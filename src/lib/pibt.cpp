@@ -248,13 +248,13 @@ void PibtStep::order_candidates_with_turns(const WorldView& world, int ai, bool 
   const Pose at = world.pose(ai);
   std::shuffle(cand, cand + m, rng_);
   const bool free_first = opt_.tie_break != PibtOptions::TieBreak::kRandom;
+  const int pusher_waits = pushed && !opt_.rotation_commit ? opt_.rotation_push_turn_cost : 0;  // per turning cell
   long long key[5];
   for (int k = 0; k < m; ++k) {
     const Cell c = cand[k];
     const Heading h = c == at.cell ? at.heading : heading_of_move(grid_, at.cell, c);
     const int turns = turn_steps(at.heading, h);
-    const int pusher_waits = pushed && turns > 0 && !opt_.rotation_commit ? opt_.rotation_push_turn_cost : 0;
-    const long long cost = std::min(row.at(c, h), 1 << 24) + turns + 1 + pusher_waits;
+    const long long cost = std::min(row.at(c, h), 1 << 24) + turns + 1 + (turns > 0 ? pusher_waits : 0);
     key[k] = (c == pref ? 0LL : 1LL << 40) + cost * 8 + turns * 2 + (free_first && occupied_now_[c] != kFree ? 1 : 0);
   }
   for (int k = 1; k < m; ++k)
