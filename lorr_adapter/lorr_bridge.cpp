@@ -10,7 +10,6 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
-#include <unordered_set>
 
 #include "gdrhcr/dist_table.hpp"
 #include "gdrhcr/grid.hpp"
@@ -141,19 +140,20 @@ struct Bridge::Impl {
 
   // The distance rows of the agents' goals (current ones first, then those revealed ahead),
   // computed until `deadline`. A row costs a search over the map, and the first step of a fleet
-  // of thousands needs thousands of them.
+  // of thousands needs thousands of them. The table holds the rows it has not evicted (has()): a
+  // goal that comes back after its row was evicted gets the row here again, not in the planner's
+  // step, which would have to compute it past its budget.
   // Rows are computed in batches of kRowBatch on the thread pool (DistTable::prefetch).
   void warm_rows(Clock::time_point deadline) {
     std::vector<Cell> batch;
     auto flush = [&] {
       planning_dist->prefetch(batch);
-      ready.insert(batch.begin(), batch.end());
       batch.clear();
     };
     for (int ahead = 0; ahead < 2; ++ahead)
       for (auto& g : goals)
         for (size_t k = ahead ? 1 : 0; k < (ahead ? g.size() : std::min<size_t>(1, g.size())); ++k) {
-          if (ready.count(g[k]) || std::find(batch.begin(), batch.end(), g[k]) != batch.end()) continue;
+          if (planning_dist->has(g[k]) || std::find(batch.begin(), batch.end(), g[k]) != batch.end()) continue;
           if (Clock::now() > deadline) return flush();
           batch.push_back(g[k]);
           if (static_cast<int>(batch.size()) == kRowBatch) flush();
@@ -166,7 +166,7 @@ struct Bridge::Impl {
   bool goals_with_rows() {
     for (size_t i = 0; i < goals.size(); ++i) {
       size_t k = 0;
-      while (k < goals[i].size() && ready.count(goals[i][k])) ++k;
+      while (k < goals[i].size() && planning_dist->has(goals[i][k])) ++k;
       goals[i].resize(k);
       if (k == 0 && last_goal[i] == kNoCell) return false;
       if (k == 0) goals[i].push_back(last_goal[i]);
@@ -211,7 +211,6 @@ struct Bridge::Impl {
   std::vector<Cell> pos, next;
   std::vector<Heading> headings, next_headings;
   std::vector<std::vector<Cell>> goals;
-  std::unordered_set<Cell> ready;  // goals whose rows warm_rows computed
   std::vector<Cell> last_goal;     // per agent: the goal it was last planned with
 };
 
@@ -309,10 +308,18 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
     const double share = Impl::kPlannerShare * m.options.budget_ms / 1000.0;
     view.step_budget_s = std::max(share / 10, share - used - m.overrun_s);
   }
+  const uint64_t rows_before = m.planning_dist->bfs_count();
   m.planner->plan_step(view, m.next);
   if (capped) {
     const double ran = std::chrono::duration<double>(Clock::now() - t_plan).count();
     m.overrun_s = std::max(Impl::kOverrunDecay * m.overrun_s, ran - view.step_budget_s);
+    const double took_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    if (took_ms > m.options.budget_ms)
+      std::fprintf(stderr,
+                   "gdrhcr lorr adapter: timestep %d took %.1f ms of a %g ms budget: rows %.1f ms, planner %.1f ms "
+                   "of %.1f given, %llu rows computed in the planner\n",
+                   timestep, took_ms, m.options.budget_ms, took_ms - 1000 * ran, 1000 * ran,
+                   1000 * view.step_budget_s, static_cast<unsigned long long>(m.planning_dist->bfs_count() - rows_before));
   }
   for (int i = 0; i < n; ++i) {
     const auto a = action_between(m.grid, Pose{m.pos[i], m.headings[i]}, Pose{m.next[i], m.next_headings[i]});

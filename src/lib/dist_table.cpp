@@ -384,6 +384,11 @@ std::vector<std::shared_ptr<const DistRow>> DistTable::rows(const std::vector<Ce
   return out;
 }
 
+bool DistTable::has(Cell goal) const {
+  std::shared_lock lock(mutex_);
+  return rows_.count(goal) > 0;
+}
+
 size_t DistTable::cached_rows() const {
   std::shared_lock lock(mutex_);
   return rows_.size();

@@ -174,8 +174,14 @@ TEST(DistTable, BudgetHoldsUnderManyDistinctGoals) {
   const auto bfs_before = d.bfs_count();
   EXPECT_EQ(d.row(g.cell(0, 0)), held);
   EXPECT_EQ(d.bfs_count(), bfs_before);
+  // has() tells the cached rows from the evicted ones, without counting as a use.
+  EXPECT_TRUE(d.has(g.cell(0, 0)));
+  EXPECT_TRUE(d.has(g.free_cells().back()));
+  EXPECT_FALSE(d.has(g.cell(1, 0)));
+  EXPECT_EQ(d.bfs_count(), bfs_before);
   // Evicted rows are recomputed with the same answer.
   EXPECT_EQ(d.get(g.cell(1, 0), g.cell(29, 29)), 28 + 29);
+  EXPECT_TRUE(d.has(g.cell(1, 0)));
 }
 
 TEST(DistTable, HeldRowsAreNeverEvictedAndAreCounted) {

@@ -183,6 +183,9 @@ class DistTable {
   uint64_t id() const { return id_; }
   size_t budget_bytes() const { return budget_; }
   size_t cached_rows() const;
+  // Whether the row of `goal` is cached now, so that row(goal) costs no BFS (until an eviction).
+  // Does not count as a use of the row.
+  bool has(Cell goal) const;
   // Bytes of the cached rows (every live row the table handed out), exact.
   size_t cached_bytes() const;
   size_t peak_bytes() const;
