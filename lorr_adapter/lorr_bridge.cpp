@@ -147,14 +147,18 @@ struct Bridge::Impl {
   void warm_rows(Clock::time_point deadline) {
     std::vector<Cell> batch;
     auto flush = [&] {
+      const auto t = Clock::now();
       planning_dist->prefetch(batch);
+      if (!batch.empty()) batch_s = std::max(kOverrunDecay * batch_s, std::chrono::duration<double>(Clock::now() - t).count());
       batch.clear();
     };
+    // A batch is started only when one like the slowest lately ends by the deadline.
+    const auto batch_time = [&] { return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(batch_s)); };
     for (int ahead = 0; ahead < 2; ++ahead)
       for (auto& g : goals)
         for (size_t k = ahead ? 1 : 0; k < (ahead ? g.size() : std::min<size_t>(1, g.size())); ++k) {
           if (planning_dist->has(g[k]) || std::find(batch.begin(), batch.end(), g[k]) != batch.end()) continue;
-          if (Clock::now() > deadline) return flush();
+          if (Clock::now() + batch_time() > deadline) return flush();
           batch.push_back(g[k]);
           if (static_cast<int>(batch.size()) == kRowBatch) flush();
         }
@@ -201,6 +205,7 @@ struct Bridge::Impl {
   static constexpr double kOverrunDecay = 0.99;  // per step, of the overrun remembered
   static constexpr int kRowBatch = 2;  // rows computed at once: one row's time on two cores
   double overrun_s = 0;  // how far the planner's steps ran past their budget lately
+  double batch_s = 0;    // the slowest batch of rows lately
   BridgeOptions options;
   std::FILE* times = nullptr;
   Grid grid;
@@ -280,17 +285,20 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
     m.headings[i] = static_cast<Heading>(headings[i]);
   }
   actions.assign(n, kStartKitWait);
-  // Rows first, within half our budget (30% of the Start-Kit's limit without one); agents whose
-  // goal rows are not ready keep their last goal; the planner gets what is left of 90% of the
-  // budget. While some agent has had no goal with a row yet (the first steps of a fleet of
-  // thousands: 10,000 rows take seconds), rows get 30% of the Start-Kit's limit, whatever our
-  // budget, and the step is all waits (valid): the warm-up is paid once, in a few steps.
+  // Rows first, within half our budget (30% of the Start-Kit's limit without one; a batch of rows
+  // is begun only if one like the slowest lately would end in time); agents whose goal rows are
+  // not ready keep their last goal; the planner gets what is left of 90% of the budget. While
+  // some agent has had no goal with a row yet (the first steps of a fleet of thousands: 10,000
+  // rows take seconds), the step is all waits (valid) and rows get 90% of our budget (30% of the
+  // Start-Kit's limit without one): the warm-up is paid once, in the first steps, and with a
+  // budget it keeps the budget too; the step that completes it is still all waits, as the rows
+  // leave the planner no time.
   const auto limit = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(time_limit_s));
   const auto budget = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(m.options.budget_ms));
   const bool capped = m.options.budget_ms > 0 && budget < limit;
   const bool warming = std::find(m.last_goal.begin(), m.last_goal.end(), kNoCell) != m.last_goal.end();
-  m.warm_rows(t0 + (capped && !warming ? budget / 2 : limit * 3 / 10));
-  if (!m.goals_with_rows()) {
+  m.warm_rows(t0 + (!capped ? limit * 3 / 10 : warming ? budget * 9 / 10 : budget / 2));
+  if (!m.goals_with_rows() || (warming && capped)) {
     std::fprintf(stderr, "gdrhcr lorr adapter: timestep %d: computing distance rows, every agent waits\n", timestep);
     m.record(t0);
     return;

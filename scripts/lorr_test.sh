@@ -59,6 +59,23 @@ print(f"lorr_test: OK: AllValid Yes, no errors, {r['numTaskFinished']} tasks fin
       "gdrhcr_sim --lorr-problem writes the same output")
 PY
 
+# With a budget of our own (100 ms per step, far below the Start-Kit's 1 s): the distance rows'
+# warm-up, then planning within the budget; still valid, and tasks are finished.
+bash "$top/scripts/bench_lorr.sh" "$kit" "$instance" 60 "$tmp/capped.json" 100 2>"$tmp/capped.err" >/dev/null ||
+  { cat "$tmp/capped.err"; echo "lorr_test: FAIL: the run with a 100 ms budget"; exit 1; }
+/usr/bin/python3 - "$tmp/capped.json" "$tmp/capped.times" <<'PY' || exit 1
+import json, sys
+r = json.load(open(sys.argv[1]))
+steps = open(sys.argv[2]).read().split()
+problems = []
+if r.get("AllValid") != "Yes" or r.get("errors"): problems.append(f"AllValid {r.get('AllValid')!r}, errors {r.get('errors', [])[:5]}")
+if r.get("numTaskFinished", 0) < 5: problems.append(f"only {r.get('numTaskFinished')} tasks finished")
+if len(steps) != 60: problems.append(f"{len(steps)} step times recorded, not 60")
+if problems:
+    print("lorr_test: FAIL with a 100 ms budget: " + "; ".join(problems))
+    sys.exit(1)
+print(f"lorr_test: OK with a 100 ms budget: {r['numTaskFinished']} tasks finished, AllValid Yes")
+PY
 # Offline preparation in the Start-Kit's preprocessing phase (issue 24 item 2): the first run
 # makes the file for this map and fleet in GDRHCR_PREP_DIR, the second loads it; both valid.
 mkdir -p "$tmp/prep"
