@@ -17,7 +17,7 @@ namespace gdrhcr_lorr {
 //   GDRHCR_BUDGET_MS  our time per step in ms (0 = none), distance rows included: the rows of
 //                     new goals get up to half of it (an agent whose goal has no row yet keeps
 //                     its last goal; the first steps, until every agent had one, are all waits
-//                     with 30% of the Start-Kit's limit for rows), GD-RHCR's step-budget is 90%
+//                     with 90% of the budget for rows), GD-RHCR's step-budget is 90%
 //                     of it, less the rows' time, and RHCR's PBS timeout all of it, unless
 //                     GDRHCR_PARAMS sets them
 //   GDRHCR_TIMES_OUT  a file that gets our time per step in ms, one line per step (optional)
@@ -58,7 +58,8 @@ class Bridge {
   // no task). actions[i] gets the Start-Kit's Action value (0 FW, 1 CR, 2 CCR, 3 W). The
   // distance rows of new goals are computed first, within half the budget (30% of the limit
   // without one); an agent whose goal has no row yet keeps its last goal, and a step where some
-  // agent has none at all (the first of a fleet of thousands) is all waits.
+  // agent has none at all (the first of a fleet of thousands) is all waits, its rows within 90%
+  // of the budget. A step that runs over the budget is reported on stderr with its phases.
   void plan(int timestep, double time_limit_s, const std::vector<int>& locations, const std::vector<int>& headings,
             const std::vector<std::vector<int>>& goals, std::vector<int>& actions);
 
