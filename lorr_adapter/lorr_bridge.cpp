@@ -183,9 +183,13 @@ struct Bridge::Impl {
     if (times) std::fclose(times);
   }
   // Our time for one step, to GDRHCR_TIMES_OUT, flushed at once (the Start-Kit ends with _exit).
+  // Counts the step, and one over the budget.
   void record(Clock::time_point t0) {
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    ++stats.steps;
+    if (options.budget_ms > 0 && ms > options.budget_ms) ++stats.over_budget;
     if (!times) return;
-    std::fprintf(times, "%.3f\n", std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    std::fprintf(times, "%.3f\n", ms);
     std::fflush(times);
   }
 
@@ -206,6 +210,7 @@ struct Bridge::Impl {
   static constexpr int kRowBatch = 2;  // rows computed at once: one row's time on two cores
   double overrun_s = 0;  // how far the planner's steps ran past their budget lately
   double batch_s = 0;    // the slowest batch of rows lately
+  BridgeStats stats;
   BridgeOptions options;
   std::FILE* times = nullptr;
   Grid grid;
@@ -267,6 +272,12 @@ Bridge::Bridge(int rows, int cols, const std::vector<int>& map, int num_agents, 
 
 Bridge::~Bridge() = default;
 
+BridgeStats Bridge::stats() const {
+  BridgeStats s = impl_->stats;
+  s.evictions = impl_->planning_dist->evictions();
+  return s;
+}
+
 void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& locations,
                   const std::vector<int>& headings, const std::vector<std::vector<int>>& goal_locations,
                   std::vector<int>& actions) {
@@ -297,8 +308,11 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
   const auto budget = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(m.options.budget_ms));
   const bool capped = m.options.budget_ms > 0 && budget < limit;
   const bool warming = std::find(m.last_goal.begin(), m.last_goal.end(), kNoCell) != m.last_goal.end();
+  const uint64_t rows_at_start = m.planning_dist->bfs_count();
   m.warm_rows(t0 + (!capped ? limit * 3 / 10 : warming ? budget * 9 / 10 : budget / 2));
+  m.stats.rows_before_planning += m.planning_dist->bfs_count() - rows_at_start;
   if (!m.goals_with_rows() || (warming && capped)) {
+    ++m.stats.warm_up_steps;
     std::fprintf(stderr, "gdrhcr lorr adapter: timestep %d: computing distance rows, every agent waits\n", timestep);
     m.record(t0);
     return;
@@ -318,6 +332,7 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
   }
   const uint64_t rows_before = m.planning_dist->bfs_count();
   m.planner->plan_step(view, m.next);
+  m.stats.rows_in_planner += m.planning_dist->bfs_count() - rows_before;
   if (capped) {
     const double ran = std::chrono::duration<double>(Clock::now() - t_plan).count();
     m.overrun_s = std::max(Impl::kOverrunDecay * m.overrun_s, ran - view.step_budget_s);

@@ -47,6 +47,16 @@ struct BridgeOptions {
 // Throws std::invalid_argument naming the variable for a malformed value.
 BridgeOptions bridge_options_from_env();
 
+// What the bridge did so far, for tests and reports.
+struct BridgeStats {
+  long steps = 0;
+  long warm_up_steps = 0;   // all-wait steps while some agent had no goal with a row
+  long over_budget = 0;     // steps that took longer than the budget (with one)
+  uint64_t rows_before_planning = 0;  // distance rows computed in the row phase
+  uint64_t rows_in_planner = 0;       // rows the planner had to compute itself (past its budget)
+  uint64_t evictions = 0;             // rows the distance table dropped to keep its memory budget
+};
+
 class Bridge {
  public:
   // map[row * cols + col] = 1 for a blocked cell (the Start-Kit's env->map). Throws with a
@@ -62,6 +72,7 @@ class Bridge {
   // of the budget. A step that runs over the budget is reported on stderr with its phases.
   void plan(int timestep, double time_limit_s, const std::vector<int>& locations, const std::vector<int>& headings,
             const std::vector<std::vector<int>>& goals, std::vector<int>& actions);
+  BridgeStats stats() const;
 
  private:
   struct Impl;

@@ -1,0 +1,98 @@
+// The Start-Kit adapter's core side (lorr_adapter/lorr_bridge.hpp), driven as the Start-Kit
+// drives it but without the Start-Kit: the distance rows' warm-up within a budget, and rows the
+// distance table evicted computed again before the planner's step, not inside it.
+#include "lorr_bridge.hpp"
+
+#include <gtest/gtest.h>
+
+#include <set>
+#include <string>
+#include <vector>
+
+#include "gdrhcr/action_model.hpp"
+#include "gdrhcr/grid.hpp"
+
+namespace {
+
+using gdrhcr::Action;
+using gdrhcr::Grid;
+using gdrhcr::Pose;
+using gdrhcr_lorr::Bridge;
+using gdrhcr_lorr::BridgeOptions;
+
+constexpr int kWait = 3;  // the Start-Kit's W
+
+// The Start-Kit's map: 1 for a blocked cell, row-major like our cells.
+std::vector<int> start_kit_map(const Grid& g) {
+  std::vector<int> map(g.num_cells());
+  for (int c = 0; c < g.num_cells(); ++c) map[c] = g.is_free(c) ? 0 : 1;
+  return map;
+}
+
+Action our_action(int a) {
+  switch (a) {
+    case 0: return Action::kForward;
+    case 1: return Action::kClockwise;
+    case 2: return Action::kCounterClockwise;
+    default: return Action::kWait;
+  }
+}
+
+Grid load(const std::string& name) { return Grid::load(std::string(GDRHCR_SOURCE_DIR) + "/maps/" + name); }
+
+TEST(LorrBridge, WithABudgetTheWarmUpWaitsOnceThenTheFleetMovesWithoutCollisions) {
+  const Grid g = load("random-32-32-20.map");
+  const int n = 20;
+  std::vector<int> pos(n), head(n, 0);
+  std::vector<std::vector<int>> goals(n);
+  const auto& free = g.free_cells();
+  for (int i = 0; i < n; ++i) pos[i] = free[i], goals[i] = {free[free.size() - 1 - 7 * i]};
+  BridgeOptions o;
+  o.budget_ms = 100;
+  Bridge bridge(g.height(), g.width(), start_kit_map(g), n, o);
+  std::vector<int> actions;
+  bridge.plan(0, 1.0, pos, head, goals, actions);
+  EXPECT_EQ(actions, std::vector<int>(n, kWait)) << "the step that computes the rows is all waits";
+  EXPECT_EQ(bridge.stats().warm_up_steps, 1);
+  int forward = 0;
+  for (int t = 1; t <= 30; ++t) {
+    bridge.plan(t, 1.0, pos, head, goals, actions);
+    ASSERT_EQ(static_cast<int>(actions.size()), n);
+    std::set<int> cells;
+    for (int i = 0; i < n; ++i) {
+      forward += actions[i] == 0;
+      const Pose p = gdrhcr::apply_action(g, Pose{pos[i], static_cast<gdrhcr::Heading>(head[i])}, our_action(actions[i]));
+      ASSERT_TRUE(g.is_free(p.cell)) << "agent " << i << " at step " << t;
+      pos[i] = p.cell, head[i] = p.heading;
+      ASSERT_TRUE(cells.insert(pos[i]).second) << "two agents in cell " << pos[i] << " after step " << t;
+    }
+  }
+  EXPECT_GT(forward, n);
+  EXPECT_EQ(bridge.stats().warm_up_steps, 1);
+  EXPECT_EQ(bridge.stats().steps, 31);
+}
+
+TEST(LorrBridge, ARowTheTableEvictedIsComputedAgainBeforeThePlannersStep) {
+  // A 1 MB table holds a few dozen rows of this map; 200 goals come round again and again.
+  const Grid g = load("warehouse-10-20-10-2-1.map");
+  const int n = 10, distinct = 200;
+  const auto& free = g.free_cells();
+  std::vector<int> pos(n), head(n, 0), targets(distinct);
+  for (int i = 0; i < n; ++i) pos[i] = free[37 * i];
+  for (int k = 0; k < distinct; ++k) targets[k] = free[(free.size() / distinct) * k + 3];
+  BridgeOptions o;
+  o.dist_budget_mb = 1;
+  Bridge bridge(g.height(), g.width(), start_kit_map(g), n, o);
+  std::vector<int> actions;
+  std::vector<std::vector<int>> goals(n);
+  for (int t = 0; t < 3 * distinct / n; ++t) {
+    for (int i = 0; i < n; ++i) goals[i] = {targets[(t * n + i) % distinct]};
+    bridge.plan(t, 1.0, pos, head, goals, actions);
+  }
+  const auto s = bridge.stats();
+  EXPECT_GT(s.evictions, 0u);
+  EXPECT_GT(s.rows_before_planning, static_cast<uint64_t>(distinct)) << "evicted rows computed again";
+  EXPECT_EQ(s.rows_in_planner, 0u);
+}
+
+}  // namespace
