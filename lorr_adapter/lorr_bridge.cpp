@@ -209,7 +209,7 @@ struct Bridge::Impl {
   static constexpr double kOverrunDecay = 0.99;  // per step, of the overrun remembered
   static constexpr int kRowBatch = 2;  // rows computed at once: one row's time on two cores
   double overrun_s = 0;  // how far the planner's steps ran past their budget lately
-  double batch_s = 0;    // the slowest batch of rows lately
+  double batch_s = 0;    // the slowest batch of rows lately (decaying by kOverrunDecay a batch)
   BridgeStats stats;
   BridgeOptions options;
   std::FILE* times = nullptr;
@@ -339,7 +339,7 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
     const double took_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     if (took_ms > m.options.budget_ms)
       std::fprintf(stderr,
-                   "gdrhcr lorr adapter: timestep %d took %.1f ms of a %g ms budget: rows %.1f ms, planner %.1f ms "
+                   "gdrhcr lorr adapter: timestep %d took %.1f ms of a %g ms budget: rows and input %.1f ms, planner %.1f ms "
                    "of %.1f given, %llu rows computed in the planner\n",
                    timestep, took_ms, m.options.budget_ms, took_ms - 1000 * ran, 1000 * ran,
                    1000 * view.step_budget_s, static_cast<unsigned long long>(m.planning_dist->bfs_count() - rows_before));
