@@ -136,7 +136,6 @@ struct Bridge::Impl {
     next.resize(n);
     goals.resize(n);
     last_goal.assign(n, kNoCell);
-    immovable.assign(n, 0);
   }
 
   // The distance rows of the agents' goals (current ones first, then those revealed ahead),
@@ -147,22 +146,19 @@ struct Bridge::Impl {
   // Rows are computed in batches of kRowBatch on the thread pool (DistTable::prefetch).
   void warm_rows(Clock::time_point deadline) {
     std::vector<Cell> batch;
-    bool some = false;  // a batch was computed in this call
     auto flush = [&] {
       const auto t = Clock::now();
       planning_dist->prefetch(batch);
       if (!batch.empty()) batch_s = std::max(kOverrunDecay * batch_s, std::chrono::duration<double>(Clock::now() - t).count());
-      some = some || !batch.empty();
       batch.clear();
     };
-    // A batch is started only when one like the slowest lately ends by the deadline, except the
-    // first of the call: however short the budget, rows keep coming.
+    // A batch is started only when one like the slowest lately ends by the deadline.
     const auto batch_time = [&] { return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(batch_s)); };
     for (int ahead = 0; ahead < 2; ++ahead)
       for (auto& g : goals)
         for (size_t k = ahead ? 1 : 0; k < (ahead ? g.size() : std::min<size_t>(1, g.size())); ++k) {
           if (planning_dist->has(g[k]) || std::find(batch.begin(), batch.end(), g[k]) != batch.end()) continue;
-          if (some && Clock::now() + batch_time() > deadline) return flush();
+          if (Clock::now() + batch_time() > deadline) return flush();
           batch.push_back(g[k]);
           if (static_cast<int>(batch.size()) == kRowBatch) flush();
         }
@@ -170,23 +166,15 @@ struct Bridge::Impl {
   }
   // The goals the planner gets: each agent's goals up to the first without a row; an agent whose
   // current goal has none yet keeps the goal it had (it waits there a step or two: the row comes
-  // in a later step). An agent that never had a goal with a row (the first steps of a fleet of
-  // thousands) is held where it stands (immovable for the planner, which plans around it) with a
-  // goal whose row is there, so the planner computes no row for it. False when no goal has a row.
+  // in a later step). False when some agent has no goal with a row at all (the first steps).
   bool goals_with_rows() {
-    Cell any = kNoCell;  // a goal with a row
-    for (size_t i = 0; i < goals.size() && any == kNoCell; ++i)
-      if (!goals[i].empty() && planning_dist->has(goals[i][0])) any = goals[i][0];
-    if (any == kNoCell) return false;
-    held = 0;
     for (size_t i = 0; i < goals.size(); ++i) {
       size_t k = 0;
       while (k < goals[i].size() && planning_dist->has(goals[i][k])) ++k;
       goals[i].resize(k);
-      immovable[i] = k == 0 && last_goal[i] == kNoCell;
-      held += immovable[i];
-      if (k == 0) goals[i].push_back(immovable[i] ? any : last_goal[i]);
-      if (!immovable[i]) last_goal[i] = goals[i][0];
+      if (k == 0 && last_goal[i] == kNoCell) return false;
+      if (k == 0) goals[i].push_back(last_goal[i]);
+      last_goal[i] = goals[i][0];
     }
     return true;
   }
@@ -234,8 +222,6 @@ struct Bridge::Impl {
   std::vector<Heading> headings, next_headings;
   std::vector<std::vector<Cell>> goals;
   std::vector<Cell> last_goal;     // per agent: the goal it was last planned with
-  std::vector<uint8_t> immovable;  // per agent: held this step, as no goal of its has had a row
-  int held = 0;                    // agents held this step
 };
 
 namespace {
@@ -312,28 +298,30 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
   actions.assign(n, kStartKitWait);
   // Rows first, within half our budget (30% of the Start-Kit's limit without one; a batch of rows
   // is begun only if one like the slowest lately would end in time); agents whose goal rows are
-  // not ready keep their last goal, or are held where they stand if they never had one (the first
-  // steps of a fleet of thousands: 10,000 rows take seconds); the planner gets what is left of
-  // 90% of the budget. A step where no goal has a row yet is all waits.
+  // not ready keep their last goal; the planner gets what is left of 90% of the budget. While
+  // some agent has had no goal with a row yet (the first steps of a fleet of thousands: 10,000
+  // rows take seconds), the step is all waits (valid) and rows get 90% of our budget (30% of the
+  // Start-Kit's limit without one): the warm-up is paid once, in the first steps, and with a
+  // budget it keeps the budget too; the step that completes it is still all waits, as the rows
+  // leave the planner no time.
   const auto limit = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(time_limit_s));
   const auto budget = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(m.options.budget_ms));
   const bool capped = m.options.budget_ms > 0 && budget < limit;
+  const bool warming = std::find(m.last_goal.begin(), m.last_goal.end(), kNoCell) != m.last_goal.end();
   const uint64_t rows_at_start = m.planning_dist->bfs_count();
-  m.warm_rows(t0 + (capped ? budget / 2 : limit * 3 / 10));
+  m.warm_rows(t0 + (!capped ? limit * 3 / 10 : warming ? budget * 9 / 10 : budget / 2));
   m.stats.rows_before_planning += m.planning_dist->bfs_count() - rows_at_start;
-  if (!m.goals_with_rows()) {
+  if (!m.goals_with_rows() || (warming && capped)) {
     ++m.stats.warm_up_steps;
     std::fprintf(stderr, "gdrhcr lorr adapter: timestep %d: computing distance rows, every agent waits\n", timestep);
     m.record(t0);
     return;
   }
-  m.stats.held_agent_steps += m.held;
   std::fill(m.next.begin(), m.next.end(), kNoCell);
   WorldView view{m.grid, m.dist, timestep, m.pos, m.goals};
   view.action_model = ActionModel::kRotation;
   view.headings = &m.headings;
   view.next_headings = &m.next_headings;
-  if (m.held > 0) view.immovable = &m.immovable;
   // The planner's share less the rows' time and less what its steps ran past the budget they
   // were given lately (the work after its deadlines: with 3,000 agents 5-10 ms), at least a tenth.
   const auto t_plan = Clock::now();

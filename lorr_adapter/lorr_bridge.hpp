@@ -50,8 +50,7 @@ BridgeOptions bridge_options_from_env();
 // What the bridge did so far, for tests and reports.
 struct BridgeStats {
   long steps = 0;
-  long warm_up_steps = 0;   // all-wait steps: no goal had a row yet
-  long held_agent_steps = 0;  // agents held in place a step as none of their goals had a row yet
+  long warm_up_steps = 0;   // all-wait steps while some agent had no goal with a row
   long over_budget = 0;     // steps that took longer than the budget (with one)
   uint64_t rows_before_planning = 0;  // distance rows computed in the row phase
   uint64_t rows_in_planner = 0;       // rows the planner had to compute itself (past its budget)
