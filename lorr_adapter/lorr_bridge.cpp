@@ -146,19 +146,22 @@ struct Bridge::Impl {
   // Rows are computed in batches of kRowBatch on the thread pool (DistTable::prefetch).
   void warm_rows(Clock::time_point deadline) {
     std::vector<Cell> batch;
+    bool some = false;  // a batch was computed in this call
     auto flush = [&] {
       const auto t = Clock::now();
       planning_dist->prefetch(batch);
       if (!batch.empty()) batch_s = std::max(kOverrunDecay * batch_s, std::chrono::duration<double>(Clock::now() - t).count());
+      some = some || !batch.empty();
       batch.clear();
     };
-    // A batch is started only when one like the slowest lately ends by the deadline.
+    // A batch is started only when one like the slowest lately ends by the deadline, except the
+    // first of the call: however short the budget, rows keep coming.
     const auto batch_time = [&] { return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(batch_s)); };
     for (int ahead = 0; ahead < 2; ++ahead)
       for (auto& g : goals)
         for (size_t k = ahead ? 1 : 0; k < (ahead ? g.size() : std::min<size_t>(1, g.size())); ++k) {
           if (planning_dist->has(g[k]) || std::find(batch.begin(), batch.end(), g[k]) != batch.end()) continue;
-          if (Clock::now() + batch_time() > deadline) return flush();
+          if (some && Clock::now() + batch_time() > deadline) return flush();
           batch.push_back(g[k]);
           if (static_cast<int>(batch.size()) == kRowBatch) flush();
         }

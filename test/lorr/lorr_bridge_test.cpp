@@ -72,6 +72,26 @@ TEST(LorrBridge, WithABudgetTheWarmUpWaitsOnceThenTheFleetMovesWithoutCollisions
   EXPECT_EQ(bridge.stats().steps, 31);
 }
 
+TEST(LorrBridge, HoweverShortTheBudgetRowsKeepComingAndTheWarmUpEnds) {
+  // A budget far too short for any row: one batch of rows per step still comes.
+  const Grid g = load("random-32-32-20.map");
+  const int n = 20;
+  std::vector<int> pos(n), head(n, 0);
+  std::vector<std::vector<int>> goals(n);
+  const auto& free = g.free_cells();
+  for (int i = 0; i < n; ++i) pos[i] = free[i], goals[i] = {free[free.size() - 1 - 7 * i]};
+  BridgeOptions o;
+  o.budget_ms = 0.001;
+  Bridge bridge(g.height(), g.width(), start_kit_map(g), n, o);
+  std::vector<int> actions;
+  for (int t = 0; t < 15; ++t) bridge.plan(t, 1.0, pos, head, goals, actions);
+  const auto s = bridge.stats();
+  EXPECT_GE(s.warm_up_steps, 1);
+  EXPECT_LT(s.warm_up_steps, 15) << "the 20 goals' rows, a batch per step";
+  EXPECT_GE(s.rows_before_planning, static_cast<uint64_t>(n));
+  EXPECT_EQ(s.rows_in_planner, 0u);
+}
+
 TEST(LorrBridge, ARowTheTableEvictedIsComputedAgainBeforeThePlannersStep) {
   // A 1 MB table holds a few dozen rows of this map; 200 goals come round again and again.
   const Grid g = load("warehouse-10-20-10-2-1.map");
