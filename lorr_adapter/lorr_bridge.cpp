@@ -335,7 +335,8 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
   }
   const uint64_t rows_before = m.planning_dist->bfs_count();
   m.planner->plan_step(view, m.next);
-  m.stats.rows_in_planner += m.planning_dist->bfs_count() - rows_before;
+  const uint64_t planner_rows = m.planning_dist->bfs_count() - rows_before;
+  m.stats.rows_in_planner += planner_rows;
   if (capped) {
     const double ran = std::chrono::duration<double>(Clock::now() - t_plan).count();
     m.overrun_s = std::max(Impl::kOverrunDecay * m.overrun_s, ran - view.step_budget_s);
@@ -345,7 +346,7 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
                    "gdrhcr lorr adapter: timestep %d took %.1f ms of a %g ms budget: rows and input %.1f ms, planner %.1f ms "
                    "of %.1f given, %llu rows computed in the planner\n",
                    timestep, took_ms, m.options.budget_ms, took_ms - 1000 * ran, 1000 * ran,
-                   1000 * view.step_budget_s, static_cast<unsigned long long>(m.planning_dist->bfs_count() - rows_before));
+                   1000 * view.step_budget_s, static_cast<unsigned long long>(planner_rows));
   }
   for (int i = 0; i < n; ++i) {
     const auto a = action_between(m.grid, Pose{m.pos[i], m.headings[i]}, Pose{m.next[i], m.next_headings[i]});

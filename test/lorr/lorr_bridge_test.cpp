@@ -40,23 +40,37 @@ Action our_action(int a) {
 
 Grid load(const std::string& name) { return Grid::load(std::string(GDRHCR_SOURCE_DIR) + "/maps/" + name); }
 
+// Twenty agents on random-32-32-20 at its first free cells, facing east, each with a goal far off.
+struct SmallFleet {
+  static constexpr int n = 20;
+  Grid g = load("random-32-32-20.map");
+  std::vector<int> pos = std::vector<int>(n), head = std::vector<int>(n, 0);
+  std::vector<std::vector<int>> goals = std::vector<std::vector<int>>(n);
+  SmallFleet() {
+    const auto& free = g.free_cells();
+    for (int i = 0; i < n; ++i) pos[i] = free[i], goals[i] = {free[free.size() - 1 - 7 * i]};
+  }
+  Bridge bridge(double budget_ms) const {
+    BridgeOptions o;
+    o.budget_ms = budget_ms;
+    return Bridge(g.height(), g.width(), start_kit_map(g), n, o);
+  }
+};
+
 TEST(LorrBridge, WithABudgetTheWarmUpWaitsOnceThenTheFleetMovesWithoutCollisions) {
-  const Grid g = load("random-32-32-20.map");
-  const int n = 20;
-  std::vector<int> pos(n), head(n, 0);
-  std::vector<std::vector<int>> goals(n);
-  const auto& free = g.free_cells();
-  for (int i = 0; i < n; ++i) pos[i] = free[i], goals[i] = {free[free.size() - 1 - 7 * i]};
-  BridgeOptions o;
-  o.budget_ms = 100;
-  Bridge bridge(g.height(), g.width(), start_kit_map(g), n, o);
+  SmallFleet f;
+  const Grid& g = f.g;
+  const int n = f.n;
+  auto& pos = f.pos;
+  auto& head = f.head;
+  Bridge bridge = f.bridge(100);
   std::vector<int> actions;
-  bridge.plan(0, 1.0, pos, head, goals, actions);
+  bridge.plan(0, 1.0, pos, head, f.goals, actions);
   EXPECT_EQ(actions, std::vector<int>(n, kWait)) << "the step that computes the rows is all waits";
   EXPECT_EQ(bridge.stats().warm_up_steps, 1);
   int forward = 0;
   for (int t = 1; t <= 30; ++t) {
-    bridge.plan(t, 1.0, pos, head, goals, actions);
+    bridge.plan(t, 1.0, pos, head, f.goals, actions);
     ASSERT_EQ(static_cast<int>(actions.size()), n);
     std::set<int> cells;
     for (int i = 0; i < n; ++i) {
@@ -74,21 +88,14 @@ TEST(LorrBridge, WithABudgetTheWarmUpWaitsOnceThenTheFleetMovesWithoutCollisions
 
 TEST(LorrBridge, HoweverShortTheBudgetRowsKeepComingAndTheWarmUpEnds) {
   // A budget far too short for any row: one batch of rows per step still comes.
-  const Grid g = load("random-32-32-20.map");
-  const int n = 20;
-  std::vector<int> pos(n), head(n, 0);
-  std::vector<std::vector<int>> goals(n);
-  const auto& free = g.free_cells();
-  for (int i = 0; i < n; ++i) pos[i] = free[i], goals[i] = {free[free.size() - 1 - 7 * i]};
-  BridgeOptions o;
-  o.budget_ms = 0.001;
-  Bridge bridge(g.height(), g.width(), start_kit_map(g), n, o);
+  SmallFleet f;
+  Bridge bridge = f.bridge(0.001);
   std::vector<int> actions;
-  for (int t = 0; t < 15; ++t) bridge.plan(t, 1.0, pos, head, goals, actions);
+  for (int t = 0; t < 15; ++t) bridge.plan(t, 1.0, f.pos, f.head, f.goals, actions);
   const auto s = bridge.stats();
   EXPECT_GE(s.warm_up_steps, 1);
   EXPECT_LT(s.warm_up_steps, 15) << "the 20 goals' rows, a batch per step";
-  EXPECT_GE(s.rows_before_planning, static_cast<uint64_t>(n));
+  EXPECT_GE(s.rows_before_planning, static_cast<uint64_t>(SmallFleet::n));
   EXPECT_EQ(s.rows_in_planner, 0u);
 }
 
