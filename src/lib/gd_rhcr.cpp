@@ -627,6 +627,8 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"density_fallbacks", density_fallbacks_},
           {"budget_skips", budget_skips_},
           {"secondary_deadline_stops", pibt_.deadline_stops()},
+          {"secondary_starts", pibt_.starts()},
+          {"secondary_starts_won", pibt_.starts_won()},
           {"guidance_cut_short", guidance_ ? guidance_->cut_short() : 0},
           {"guidance_searches", guidance_ ? guidance_->searches() : 0},
           {"guidance_kept", guidance_ ? guidance_->kept() : 0},

@@ -76,7 +76,7 @@ bool PibtStep::carry_on(const WorldView& world, std::vector<Cell>& next,
     going = world.positions[i] == target_[i] || world.positions[i] == origin_[i];
   }
   if (!going || arrived) {  // plan a new configuration
-    push_all(world, next, fixed_moves);
+    choose_configuration(world, next);
     target_.assign(next.begin(), next.begin() + n);
     origin_ = world.positions;
     target_steps_ = 0;
@@ -87,6 +87,62 @@ bool PibtStep::carry_on(const WorldView& world, std::vector<Cell>& next,
   ++target_steps_;
   execute_with_turns(world, next);
   return true;
+}
+
+// rotation_starts (see PibtOptions): the best of several PIBT runs becomes the configuration.
+// Called by carry_on for the whole fleet, with nothing fixed, immovable or blocked.
+void PibtStep::choose_configuration(const WorldView& world, std::vector<Cell>& next) {
+  using Clock = std::chrono::steady_clock;
+  const std::vector<double> base = priority_;
+  std::mt19937_64 shake(rng_());
+  const std::mt19937_64 rng_at_start = rng_;
+  std::vector<Cell> best;
+  long best_gain = std::numeric_limits<long>::min();
+  int winner = 0;
+  Clock::duration slowest{0};
+  for (int k = 0; k < std::max(1, opt_.rotation_starts); ++k) {
+    const auto t0 = Clock::now();
+    if (k > 0) {
+      if (deadline_ - t0 < slowest) break;
+      shake_box(world, base, shake);
+      for (int i : order_) occupied_now_[world.positions[i]] = i, next[i] = kNoCell;
+      rng_ = rng_at_start;
+    }
+    push_all(world, next, {});
+    ++starts_;
+    const long gain = distance_gain(world, next);
+    if (gain > best_gain) best_gain = gain, best.assign(next.begin(), next.end()), winner = k;
+    slowest = std::max(slowest, Clock::now() - t0);
+  }
+  starts_won_ += winner > 0;
+  priority_ = base;
+  std::copy(best.begin(), best.end(), next.begin());
+}
+
+// The priorities of one run: `base`, raised at random by up to kStartNoise for the agents within
+// kStartBox cells (each way) of a random agent's cell.
+void PibtStep::shake_box(const WorldView& world, const std::vector<double>& base, std::mt19937_64& shake) {
+  priority_ = base;
+  const int w = grid_.width();
+  const Cell centre = world.positions[order_[shake() % order_.size()]];
+  std::uniform_real_distribution<double> noise(0.0, kStartNoise);
+  for (int i : order_) {
+    const Cell c = world.positions[i];
+    if (std::abs(c % w - centre % w) <= kStartBox && std::abs(c / w - centre / w) <= kStartBox)
+      priority_[i] += noise(shake);
+  }
+}
+
+// How much nearer their goals the cells in `next` bring the agents (distance with turns, from the
+// heading of the move), summed over the agents of this call.
+long PibtStep::distance_gain(const WorldView& world, const std::vector<Cell>& next) const {
+  long gain = 0;
+  for (int i : order_) {
+    const Pose at = world.pose(i);
+    const Heading h = next[i] == at.cell ? at.heading : heading_of_move(grid_, at.cell, next[i]);
+    gain += std::min(rows_[i]->at(at.cell, at.heading), 1 << 24) - std::min(rows_[i]->at(next[i], h), 1 << 24);
+  }
+  return gain;
 }
 
 // rotation_keep: the preferred cells of this call, each agent's kept cell where the caller gives

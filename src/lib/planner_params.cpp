@@ -51,11 +51,12 @@ std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerPa
 }
 // Fleets filling more than 90% of the free cells: agents wait 500 steps before they set out for a
 // dead end; in the rotation model no agent retreats to let another pass (the swap, after 20 steps
-// standing) and PIBT's configurations are carried out to the end.
+// standing) and PIBT's configurations are carried out to the end, each the best of 16 runs.
 std::string rule_crowded(const std::string& param, const MapFacts& f, const PlannerParams&) {
   const bool crowded = crowded_fleet(f);
   if (param == "rotation-commit") return crowded && f.model() == ActionModel::kRotation ? "1" : "0";
   if (param == "dead-end-wait") return crowded ? "500" : "0";
+  if (param == "rotation-starts") return crowded && f.model() == ActionModel::kRotation ? "16" : "1";
   return crowded ? "0" : "20";  // rotation-swap-wait
 }
 // Guidance off where its paths cannot be followed: a crowded fleet, and in the rotation model a
@@ -98,7 +99,8 @@ const std::vector<ParamRule>& param_rules() {
       {"crowded-fleet",
        "fleets holding more than 90% of the free cells: agents wait 500 steps before they set out for a dead end "
        "(dead-end-wait 500); in the rotation model no agent retreats for another (rotation-swap-wait 0, else 20 "
-       "steps standing) and PIBT's configurations are carried out to the end (rotation-commit 1)",
+       "steps standing) and PIBT's configurations are carried out to the end (rotation-commit 1), each the best of 16 "
+       "runs (rotation-starts 16)",
        std::string(kRulesFigure) + "crowded-fleet", rule_crowded},
       {"guidance-off",
        "PIBT alone moves (guidance none) where guidance paths cannot be followed: fleets holding more than 90% of "
@@ -157,6 +159,11 @@ std::vector<ParamSpec> pibt_rows() {
           flag("rotation-commit", "",
                "rotation model, cells: carry out each configuration PIBT chooses for the whole fleet (turns, then "
                "moves; agents that arrived wait) before planning the next", "0", "crowded-fleet"),
+          integer("rotation-starts", 1, 1024, "",
+                  "rotation model, with rotation-commit: each configuration is the best of this many PIBT runs, "
+                  "each but the first with the priorities around a random agent shaken (the one bringing the agents "
+                  "nearest their goals; no run past the step budget)",
+                  "crowded-fleet", "1"),
           flag("rotation-keep", "1",
                "rotation model, cells: an agent that did not get to the cell PIBT chose for it (it turned towards "
                "it, or waited for the agent in it) tries that cell first at the next step, unless guidance gives "

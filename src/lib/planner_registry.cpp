@@ -22,6 +22,7 @@ PibtOptions pibt_options(const PlannerParams& v) {
   o.rotation = v.text("rotation-pibt") == "cells" ? PibtOptions::Rotation::kCells : PibtOptions::Rotation::kOperations;
   o.rotation_swap_wait = v.integer("rotation-swap-wait");
   o.rotation_commit = v.flag("rotation-commit");
+  o.rotation_starts = v.integer("rotation-starts");
   o.rotation_keep = v.flag("rotation-keep");
   o.rotation_push_turn_cost = v.integer("rotation-push-turn-cost");
   o.dead_end_wait = v.integer("dead-end-wait");

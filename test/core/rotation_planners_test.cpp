@@ -394,3 +394,39 @@ TEST(RotationPlanners, CrowdedFleetsStayValidWithCommittedConfigurations) {
   run_valid("gd-rhcr", "room-32-32-4.map", ActionModel::kRotation, 640, 60);
   run_valid("pibt", "random-32-32-20.map", ActionModel::kRotation, 760, 60);
 }
+
+TEST(RotationPlanners, ACrowdedFleetsConfigurationIsTheBestOfSeveralRunsWithinTheBudget) {
+  // Rule crowded-fleet: each configuration is the best of 16 PIBT runs (rotation-starts), the
+  // runs after the first with the priorities around a random agent shaken. Without a budget every
+  // configuration gets its 16 runs and some are won by a shaken run; with a budget already spent
+  // only the first run is made, so nothing is shaken. Every step valid either way.
+  const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+  DistTable dist(g, ActionModel::kRotation);
+  const int agents = 780;  // 95% of the free cells
+  const auto starts = random_starts(g, agents, 5);
+  SimOptions opt;
+  opt.steps = 60;
+  opt.action_model = ActionModel::kRotation;
+  for (const char* budget : {"0", "1e-9"}) {
+    SCOPED_TRACE(std::string("step-budget ") + budget);
+    Params p;
+    p.set("step-budget", budget);
+    auto planner = make_planner("gd-rhcr", p, g, agents, 5, ActionModel::kRotation);
+    RandomNavigationStream tasks(g, 5);
+    const SimResult r = run_simulation(g, dist, tasks, *planner, starts, opt);
+    EXPECT_EQ(r.collisions, 0);
+    EXPECT_GT(r.goals_reached, 0);
+    const auto stats = planner->stats();
+    const long runs = stats["secondary_starts"].get<long>(), won = stats["secondary_starts_won"].get<long>();
+    // A configuration takes one to three steps, so 60 steps plan 20 to 60 of them.
+    if (std::string(budget) == "0") {
+      EXPECT_EQ(runs % 16, 0);
+      EXPECT_GE(runs, 16 * 20);
+      EXPECT_GT(won, 0) << "no shaken run ever beat the first";
+    } else {
+      EXPECT_GE(runs, 20);
+      EXPECT_LE(runs, 60);
+      EXPECT_EQ(won, 0);
+    }
+  }
+}
