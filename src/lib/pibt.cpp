@@ -93,6 +93,11 @@ bool PibtStep::carry_on(const WorldView& world, std::vector<Cell>& next,
 // Called by carry_on for the whole fleet, with nothing fixed, immovable or blocked.
 void PibtStep::choose_configuration(const WorldView& world, std::vector<Cell>& next) {
   using Clock = std::chrono::steady_clock;
+  if (opt_.rotation_starts <= 1) {
+    push_all(world, next, {});
+    ++starts_;
+    return;
+  }
   const std::vector<double> base = priority_;
   std::mt19937_64 shake(rng_());
   const std::mt19937_64 rng_at_start = rng_;
@@ -100,7 +105,7 @@ void PibtStep::choose_configuration(const WorldView& world, std::vector<Cell>& n
   long best_gain = std::numeric_limits<long>::min();
   int winner = 0;
   Clock::duration slowest{0};
-  for (int k = 0; k < std::max(1, opt_.rotation_starts); ++k) {
+  for (int k = 0; k < opt_.rotation_starts; ++k) {
     const auto t0 = Clock::now();
     if (k > 0) {
       if (deadline_ - t0 < slowest) break;
