@@ -78,9 +78,9 @@ struct PibtOptions {
   // (kStartBox cells each way from an agent's cell), from the same random state, so the runs
   // differ around that box. The run whose cells bring the agents nearest their goals (distance
   // with turns gained, summed over the fleet) is carried out; the first wins ties. With a
-  // deadline (set_deadline) no run starts that would end past it. Runs shaking the whole fleet
-  // at once lost on random-64-64-20 with 3,041 agents: one sum over many distant changes
-  // hardly tells the runs apart (docs/results.md, session 20).
+  // deadline (set_deadline) no run starts that would end past it. A box keeps each run's
+  // difference local, so one sum over a large fleet still tells the runs apart (docs/results.md,
+  // session 20).
   int rotation_starts = 1;
   // Rotation model, kCells: an agent that did not get to the cell PIBT chose for it (it turned
   // towards it, or waited for the agent in it) tries that cell first at the next step, unless the
