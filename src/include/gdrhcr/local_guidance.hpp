@@ -148,20 +148,18 @@ class LocalGuidance {
   };
   // What one search knows of a (cell, t) pair: whether it reached it (tag = 2 x the search's
   // stamp) or closed it (+ 1), and the best g it saw; entries of earlier searches have older
-  // tags. On small maps one entry per (cell, t) of the map (key = cell x slots + t); where that
-  // table would pass kDirectMarksBytes, an open-addressing table of the pairs the search reached
-  // (a few hundred), which stays in cache: warehouse-10-20-10-2-1, 800 agents, 6% less CPU.
+  // tags. An open-addressing table (key = state x slots + t) of the pairs the search reached, a
+  // few hundred, which stays in cache; a table of every pair of the map does not (docs/results.md,
+  // "Guidance search speed").
   struct Mark {
     uint32_t key;
     uint32_t tag;
     float best_g;
   };
-  static constexpr size_t kDirectMarksBytes = size_t{1} << 20;
   struct Marks {
     std::vector<Mark> table;
     uint32_t stamp = 0, used = 0, bits = 0;
-    bool hashed = false;
-    void start(size_t pairs);  // a new search over `pairs` (cell, t) pairs
+    void start();              // a new search
     Mark& find(uint32_t key);  // the pair's entry (unseen: tag < 2 x stamp)
     void grow();
   };
