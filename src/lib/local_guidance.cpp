@@ -110,13 +110,6 @@ int LocalGuidance::band_width() const {
   return std::max(1, (2 * cfg_.window + cfg_.phases - 2) / (cfg_.phases - 1));
 }
 
-int LocalGuidance::dir(Cell from, Cell to) const {
-  const int d = to - from;
-  if (d == 1) return 0;
-  if (d == -1) return 1;
-  return d > 0 ? 2 : 3;
-}
-
 void LocalGuidance::enroll(int i, int sign) {
   const auto& p = path_[i];
   for (size_t k = 0; k < p.size(); ++k) {
@@ -166,14 +159,15 @@ void LocalGuidance::set_path(int i, int now, const std::vector<Cell>& path, Cell
   enroll(i, +1);
 }
 
-// What a step from -> to at abs_t pays on top of its 1 for meeting other paths: the collision
+// What a step from -> to in time slot s (into slot s1, the next) pays on top of its 1 for meeting other paths: the collision
 // cost (the far one from near_steps ahead on) per kind of conflict met (vertex, swap; or once for
 // either), plus a tiny amount per path met, so that among equal costs the less crowded step wins,
 // plus the contraflow cost per path planned the other way along the edge at any time.
-[[gnu::always_inline]] inline float LocalGuidance::collision_penalty(Cell from, Cell to, int abs_t, int ahead) const {
+[[gnu::always_inline]] inline float LocalGuidance::collision_penalty(Cell from, Cell to, int s, int s1,
+                                                                     int ahead) const {
   const float against = from != to ? contraflow_ * flow_[to][dir(to, from)] : 0.f;
-  const int vertex = at(to, slot(abs_t + 1));
-  const int swap = from != to ? leaving(to, slot(abs_t), dir(to, from)) : 0;
+  const int vertex = at(to, s1);
+  const int swap = from != to ? leaving(to, s, dir(to, from)) : 0;
   if (vertex + swap == 0) return against;
   const bool far = cfg_.far_collision_cost >= 0 && ahead >= cfg_.near_steps;
   const float cost = static_cast<float>(far ? cfg_.far_collision_cost : cfg_.collision_cost);
@@ -355,10 +349,12 @@ void LocalGuidance::update_banded(const WorldView& world, const std::vector<int>
   for (auto& c : counts) counts_.add(c);
 }
 
-void LocalGuidance::Marks::start() {
-  if (table.empty()) {
+void LocalGuidance::Marks::start(size_t pairs) {
+  const bool hash = pairs * sizeof(Mark) > kDirectMarksBytes;
+  if (table.empty() || hash != hashed || (!hash && table.size() != pairs)) {
+    hashed = hash;
     bits = 10;
-    table.assign(size_t{1} << bits, Mark{0, 0, 0.f});
+    table.assign(hash ? size_t{1} << bits : pairs, Mark{0, 0, 0.f});
     stamp = 0;
   }
   if (++stamp >= (1u << 31)) {  // tags are 2 x stamp (+ 1): start over before they wrap
@@ -369,6 +365,7 @@ void LocalGuidance::Marks::start() {
 }
 
 [[gnu::always_inline]] inline LocalGuidance::Mark& LocalGuidance::Marks::find(uint32_t key) {
+  if (!hashed) return table[key];
   const uint32_t live = 2 * stamp;
   for (;;) {
     const size_t mask = table.size() - 1;
@@ -387,7 +384,7 @@ void LocalGuidance::Marks::start() {
   }
 }
 
-// Doubles the table, keeping this search's entries.
+// Doubles the hashed table, keeping this search's entries.
 void LocalGuidance::Marks::grow() {
   std::vector<Mark> old(size_t{1} << (bits + 1), Mark{0, 0, 0.f});
   old.swap(table);
@@ -441,8 +438,9 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
   const auto row_ptr = world.dist.row(goal);
   const DistRow& row = *row_ptr;
   const bool rot = world.rotation();
+  const int states = rot ? kNumHeadings : 1;
   auto& marks = search.marks;
-  marks.start();
+  marks.start(static_cast<size_t>(slots_) * grid_.num_cells() * states);
   auto& nodes = search.nodes;
   auto& open = search.open;
   const uint32_t seen = 2 * marks.stamp, closed = seen + 1;
@@ -475,12 +473,13 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
     if (n.t > nodes[best].t || (n.t == nodes[best].t && n.f < nodes[best].f)) best = id;
     // Done at the window's end (or out of expansions: the deepest cheapest node so far).
     if (n.t == W || ++expanded > cfg_.max_expansions) break;
+    const int s = slot(world.timestep + n.t), s1 = s + 1 == slots_ ? 0 : s + 1;
     auto expand = [&](Cell u, Heading hd) {
       Mark& mk = marks.find(key(u, hd, n.t + 1));
       if (mk.tag == closed) return;
       const int h = dist_of(u, hd);
       if (h >= kUnreachable) return;
-      const float g = n.g + 1.f + collision_penalty(n.v, u, world.timestep + n.t, n.t);
+      const float g = n.g + 1.f + collision_penalty(n.v, u, s, s1, n.t);
       if (mk.tag == seen && mk.best_g <= g) return;  // reached as cheaply before
       mk.tag = seen;
       mk.best_g = g;
