@@ -138,9 +138,9 @@ class LocalGuidance {
     int32_t parent;
     Heading h;  // rotation model; kNoHeading in mapf
   };
-  struct OpenEntry {  // what the heap compares, kept inline for locality
-    float f;
-    int32_t t, id;
+  struct OpenEntry {  // what the heap compares (f and t packed), kept inline for locality
+    uint64_t order;
+    int32_t id;
   };
   struct Counts {
     long searches = 0, expansions = 0, cut_short = 0, kept = 0, refined = 0;
