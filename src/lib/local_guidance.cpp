@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -13,67 +12,6 @@
 #include "tsan_annotations.hpp"
 
 namespace gdrhcr {
-namespace {
-
-// The open list of the space-time search: a binary heap of entries {order, id}, the lowest f on
-// top and, among equal f, the deepest t. `order` packs both into one integer (a non-negative
-// float's bits order as the float does), so a comparison is one instruction. The heap makes the
-// same moves as std::push_heap and std::pop_heap (so full ties come out in the same order), but
-// keeps the moving entry in registers: the library's versions store it and read it back at once,
-// which stalled the search (a third of its time on empty-48-48, 400 agents).
-uint64_t open_order(float f, int32_t t) {
-  uint32_t bits;
-  std::memcpy(&bits, &f, sizeof bits);
-  return (uint64_t{bits} << 32) | (UINT32_MAX - static_cast<uint32_t>(t));
-}
-
-template <class E>
-void heap_push(std::vector<E>& h, uint64_t order, int32_t id) {
-  ptrdiff_t hole = static_cast<ptrdiff_t>(h.size());
-  h.emplace_back();
-  while (hole > 0) {
-    const ptrdiff_t parent = (hole - 1) / 2;
-    if (h[parent].order <= order) break;
-    h[hole] = h[parent];
-    hole = parent;
-  }
-  E& e = h[hole];
-  e.order = order, e.id = id;
-}
-
-// Removes the top entry and returns its id.
-template <class E>
-int32_t heap_pop(std::vector<E>& h) {
-  const int32_t top = h.front().id;
-  const uint64_t order = h.back().order;
-  const int32_t id = h.back().id;
-  h.pop_back();
-  const ptrdiff_t len = static_cast<ptrdiff_t>(h.size());
-  if (len == 0) return top;
-  ptrdiff_t hole = 0, child = 0;
-  while (child < (len - 1) / 2) {  // down to a leaf along the better children
-    child = 2 * (child + 1);
-    if (h[child].order > h[child - 1].order) --child;
-    h[hole] = h[child];
-    hole = child;
-  }
-  if ((len & 1) == 0 && child == (len - 2) / 2) {
-    child = 2 * (child + 1);
-    h[hole] = h[child - 1];
-    hole = child - 1;
-  }
-  while (hole > 0) {  // then the last entry up from there
-    const ptrdiff_t parent = (hole - 1) / 2;
-    if (h[parent].order <= order) break;
-    h[hole] = h[parent];
-    hole = parent;
-  }
-  E& e = h[hole];
-  e.order = order, e.id = id;
-  return top;
-}
-
-}  // namespace
 
 struct LocalGuidance::Parallel {
   tbb::enumerable_thread_specific<Search> search;
@@ -456,11 +394,11 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
   open.clear();
   const Heading h0 = rot ? world.pose(i).heading : kNoHeading;
   nodes.push_back({0.f, static_cast<float>(dist_of(at, h0)), 0, at, -1, h0});
-  open.push_back({open_order(nodes[0].f, 0), 0});
+  open.push(nodes[0].f, 0, 0);
   int32_t best = 0;
   int expanded = 0;
   while (!open.empty()) {
-    const int32_t id = heap_pop(open);
+    const int32_t id = open.pop();
     const Node n = nodes[id];
     Mark& mark = marks.find(key(n.v, n.h, n.t));
     if (mark.tag == closed) continue;
@@ -488,7 +426,7 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
       mk.best_g = g;
       Node& c = nodes.emplace_back();  // field by field: a whole Node stored and read back stalls
       c.g = g, c.f = g + h, c.t = n.t + 1, c.v = u, c.parent = id, c.h = hd;
-      heap_push(open, open_order(g + h, n.t + 1), static_cast<int32_t>(nodes.size() - 1));
+      open.push(g + h, n.t + 1, static_cast<int32_t>(nodes.size() - 1));
     };
     Cell nb[4];
     Heading nh[4];

@@ -56,6 +56,7 @@
 #include <random>
 #include <vector>
 
+#include "gdrhcr/open_list.hpp"
 #include "gdrhcr/planner.hpp"
 
 namespace gdrhcr {
@@ -138,10 +139,6 @@ class LocalGuidance {
     int32_t parent;
     Heading h;  // rotation model; kNoHeading in mapf
   };
-  struct OpenEntry {  // what the heap compares (f and t packed), kept inline for locality
-    uint64_t order;
-    int32_t id;
-  };
   struct Counts {
     long searches = 0, expansions = 0, cut_short = 0, kept = 0, refined = 0;
     void add(const Counts& o);
@@ -169,7 +166,7 @@ class LocalGuidance {
   struct Search {
     Marks marks;
     std::vector<Node> nodes;
-    std::vector<OpenEntry> open;
+    OpenList open;
   };
   struct Parallel;
   void drop_past(int i, int now);
