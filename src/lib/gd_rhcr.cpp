@@ -472,6 +472,17 @@ void GdRhcrPlanner::adopt_one_step_plans(const WorldView& world, const std::vect
   }
 }
 
+// Whether agent i's move to `to` follows its guidance cell `pref`: it reached it, or (rotation
+// model) it stayed and turned towards it, a step on the way.
+bool GdRhcrPlanner::follows_guidance(const WorldView& world, int i, Cell to, Cell pref) const {
+  if (to == pref) return true;
+  const Cell at = world.positions[i];
+  if (!world.rotation() || to != at || pref == at) return false;
+  const Heading want = heading_of_move(grid_, at, pref);
+  return want != kNoHeading &&
+         turn_steps((*world.next_headings)[i], want) < turn_steps(world.pose(i).heading, want);
+}
+
 // Moves `agents` with PIBT while every other agent keeps the move in `out`.
 void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>& agents,
                                   const std::vector<Cell>& fixed_next, std::vector<Cell>& out) {
@@ -496,7 +507,7 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
     for (int i : agents) {  // how often the guidance foretold the move (it had a cell for it)
       if (preferred[i] == kNoCell) continue;
       ++guided_moves_;
-      if (moves[i] != preferred[i]) ++guidance_missed_;
+      if (!follows_guidance(world, i, moves[i], preferred[i])) ++guidance_missed_;
     }
   } else {
     pibt_.set_deadline(budget_.secondary);

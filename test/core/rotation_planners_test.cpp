@@ -430,3 +430,25 @@ TEST(RotationPlanners, ACrowdedFleetsConfigurationIsTheBestOfSeveralRunsWithinTh
     }
   }
 }
+
+TEST(RotationPlanners, ATurnTowardsTheGuidanceCellFollowsTheGuidance) {
+  // One agent facing east with its goal three cells west, moved by GD-RHCR's secondary solver
+  // (k-threshold 1) along local guidance: two quarter turns in place, then three moves forward.
+  // Each turn is a step on the guidance's way, so stats.guidance_missed_share stays 0; counting a
+  // turn as a miss (the executed cell is not the guidance cell) gave 2 of 5.
+  const Grid g = Grid::from_rows({".......", ".......", "......."});
+  DistTable dist(g, ActionModel::kRotation);
+  StepValidator validator(g, ActionModel::kRotation);
+  Params p;
+  p.set("k-threshold", "1");
+  p.set("guidance", "local");
+  auto planner = make_planner("gd-rhcr", p, g, 1, 1, ActionModel::kRotation);
+  std::vector<Cell> pos = {g.cell(4, 1)};
+  std::vector<Heading> heads = {kEast};
+  const std::vector<std::vector<Cell>> goals = {{g.cell(1, 1)}};
+  int t = 0;
+  for (; t < 10 && pos[0] != goals[0][0]; ++t) ASSERT_TRUE(rotation_step(*planner, g, dist, validator, t, goals, pos, heads));
+  EXPECT_EQ(pos[0], goals[0][0]);
+  EXPECT_EQ(t, 5) << "two turns and three moves";
+  EXPECT_EQ(planner->stats()["guidance_missed_share"].get<double>(), 0.0);
+}

@@ -116,6 +116,7 @@ class GdRhcrPlanner : public Planner {
                                 SoftConstraintTable& soft) const;
   std::vector<Cell> soft_path_of(const WorldView& world, int j) const;
   void solve_primary(const WorldView& world, Job& job) const;
+  bool follows_guidance(const WorldView& world, int i, Cell to, Cell pref) const;
   void run_secondary(const WorldView& world, const std::vector<int>& agents,
                      const std::vector<Cell>& next, std::vector<Cell>& out);
   void adopt_one_step_plans(const WorldView& world, const std::vector<int>& agents,
