@@ -295,11 +295,12 @@ void LocalGuidance::Marks::start(size_t pairs) {
   if (table.empty() || hash != hashed || (!hash && table.size() != pairs)) {
     hashed = hash;
     bits = 10;
-    table.assign(hash ? size_t{1} << bits : pairs, Mark{0, 0, 0.f});
+    table.assign(hash ? size_t{1} << bits : pairs, Mark{0, 0.f});
+    keys.assign(hash ? table.size() : 0, 0);
     stamp = 0;
   }
   if (++stamp >= (1u << 31)) {  // tags are 2 x stamp (+ 1): start over before they wrap
-    std::fill(table.begin(), table.end(), Mark{0, 0, 0.f});
+    std::fill(table.begin(), table.end(), Mark{0, 0.f});
     stamp = 1;
   }
   used = 0;
@@ -313,12 +314,13 @@ void LocalGuidance::Marks::start(size_t pairs) {
     for (size_t h = (key * 0x9E3779B1u) >> (32 - bits);; h = (h + 1) & mask) {
       Mark& m = table[h];
       if (m.tag >= live) {  // taken in this search
-        if (m.key == key) return m;
+        if (keys[h] == key) return m;
         continue;
       }
       if (2 * (used + 1) > table.size()) break;  // at most half full
       ++used;
-      m = Mark{key, live - 2, 0.f};  // unseen by this search
+      m = Mark{live - 2, 0.f};  // unseen by this search
+      keys[h] = key;
       return m;
     }
     grow();
@@ -327,16 +329,19 @@ void LocalGuidance::Marks::start(size_t pairs) {
 
 // Doubles the hashed table, keeping this search's entries.
 void LocalGuidance::Marks::grow() {
-  std::vector<Mark> old(size_t{1} << (bits + 1), Mark{0, 0, 0.f});
+  std::vector<Mark> old(size_t{1} << (bits + 1), Mark{0, 0.f});
+  std::vector<uint32_t> old_keys(old.size(), 0);
   old.swap(table);
+  old_keys.swap(keys);
   ++bits;
   const uint32_t live = 2 * stamp;
   const size_t mask = table.size() - 1;
-  for (const Mark& m : old) {
-    if (m.tag < live) continue;
-    size_t h = (m.key * 0x9E3779B1u) >> (32 - bits);
+  for (size_t k = 0; k < old.size(); ++k) {
+    if (old[k].tag < live) continue;
+    size_t h = (old_keys[k] * 0x9E3779B1u) >> (32 - bits);
     while (table[h].tag >= live) h = (h + 1) & mask;
-    table[h] = m;
+    table[h] = old[k];
+    keys[h] = old_keys[k];
   }
 }
 
