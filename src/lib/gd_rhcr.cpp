@@ -472,11 +472,12 @@ void GdRhcrPlanner::adopt_one_step_plans(const WorldView& world, const std::vect
   }
 }
 
-// Whether agent i's move to `to` follows its guidance cell `pref`: it reached it, or (rotation
-// model) it stayed and turned towards it, a step on the way.
+// Whether agent i's move to `to` is the one its guidance path makes now: into the path's next
+// cell, or staying where the path stays. In the rotation model a path keeps its cell while it
+// turns, so staying and turning towards the next cell the path goes to (`pref`) follows it too.
 bool GdRhcrPlanner::follows_guidance(const WorldView& world, int i, Cell to, Cell pref) const {
-  if (to == pref) return true;
   const Cell at = world.positions[i];
+  if (to == guidance_->next_cell(i, world.timestep, at)) return true;
   if (!world.rotation() || to != at || pref == at) return false;
   const Heading want = heading_of_move(grid_, at, pref);
   return want != kNoHeading &&
