@@ -100,10 +100,11 @@ void LocalGuidance::set_path(int i, int now, const std::vector<Cell>& path, Cell
   enroll(i, +1);
 }
 
-// What a step from -> to in time slot s (into slot s1, the next) pays on top of its 1 for meeting other paths: the collision
-// cost (the far one from near_steps ahead on) per kind of conflict met (vertex, swap; or once for
-// either), plus a tiny amount per path met, so that among equal costs the less crowded step wins,
-// plus the contraflow cost per path planned the other way along the edge at any time.
+// What a step from -> to in time slot s (into slot s1, the next) pays on top of its 1 for meeting
+// other paths: the collision cost (the far one from near_steps ahead on) per kind of conflict met
+// (vertex, swap; or once for either), plus a tiny amount per path met, so that among equal costs
+// the less crowded step wins, plus the contraflow cost per path planned the other way along the
+// edge at any time.
 [[gnu::always_inline]] inline float LocalGuidance::collision_penalty(Cell from, Cell to, int s, int s1,
                                                                      int ahead) const {
   const float against = from != to ? contraflow_ * flow_[to][dir(to, from)] : 0.f;
@@ -347,7 +348,8 @@ void LocalGuidance::Marks::grow() {
 
 // The moves out of (v, h) other than a wait, in a random order, so equally good paths do not all
 // bend the same way: the free neighbours (mapf), or forward and the two quarter turns (rotation).
-[[gnu::always_inline]] inline int LocalGuidance::moves(Cell v, Heading h, bool rot, std::minstd_rand& rng, Cell* nb, Heading* nh) const {
+[[gnu::always_inline]] inline int LocalGuidance::moves(Cell v, Heading h, bool rot, std::minstd_rand& rng, Cell* nb,
+                                                      Heading* nh) const {
   int m = 0;
   if (rot) {
     if (const Cell u = forward_cell(grid_, v, h); u != kNoCell) nb[m] = u, nh[m++] = h;

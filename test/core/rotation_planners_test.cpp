@@ -447,7 +447,8 @@ TEST(RotationPlanners, ATurnTowardsTheGuidanceCellFollowsTheGuidance) {
   std::vector<Heading> heads = {kEast};
   const std::vector<std::vector<Cell>> goals = {{g.cell(1, 1)}};
   int t = 0;
-  for (; t < 10 && pos[0] != goals[0][0]; ++t) ASSERT_TRUE(rotation_step(*planner, g, dist, validator, t, goals, pos, heads));
+  for (; t < 10 && pos[0] != goals[0][0]; ++t)
+    ASSERT_TRUE(rotation_step(*planner, g, dist, validator, t, goals, pos, heads));
   EXPECT_EQ(pos[0], goals[0][0]);
   EXPECT_EQ(t, 5) << "two turns and three moves";
   EXPECT_EQ(planner->stats()["guidance_missed_share"].get<double>(), 0.0);
