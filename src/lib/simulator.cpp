@@ -25,6 +25,15 @@ static double process_cpu_s() {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
+nlohmann::json ErrandSteps::to_json() const {
+  const double n = errands > 0 ? double(errands) : 1.0;
+  return {{"errands", errands},
+          {"steps_per_errand", steps / n},
+          {"forward_per_errand", forward / n},
+          {"turns_per_errand", turns / n},
+          {"waits_per_errand", waits / n}};
+}
+
 nlohmann::json SimResult::to_json() const {
   return {{"action_model", action_model_name(action_model)},
           {"steps", steps},
@@ -41,6 +50,7 @@ nlohmann::json SimResult::to_json() const {
           {"step_cpu_time_mean_s", step_cpu_mean_s},
           {"wall_time_s", wall_time_s},
           {"goals_timeline", {{"block_steps", kTimelineSteps}, {"goals", goals_timeline}}},
+          {"errand_steps", {{"reached", errand_steps.to_json()}, {"free_flow", free_flow_errand_steps.to_json()}}},
           {"progress",
            {{"agents_late", agents_late},
             {"goals_late", goals_late},
@@ -60,7 +70,7 @@ class Run {
       const std::vector<Cell>& starts, const SimOptions& options)
       : grid_(grid), dist_(dist), tasks_(tasks), planner_(planner), opt_(options), n_(static_cast<int>(starts.size())),
         pos_(starts), next_(n_, kNoCell), goals_(n_), errand_(n_), validator_(grid, options.action_model),
-        got_at_(n_, 0), still_(n_, 0), dist0_(n_), late_(n_, 0), ever_late_(n_, 0) {
+        got_at_(n_, 0), still_(n_, 0), dist0_(n_), late_(n_, 0), ever_late_(n_, 0), leg_(n_) {
     r_.steps = options.steps;
     r_.agents = n_;
     r_.action_model = options.action_model;
@@ -95,7 +105,8 @@ class Run {
     r_.step_cpu_mean_s = steps > 0 ? cpu_sum_ / steps : 0;
     for (int i = 0; i < n_; ++i) r_.late_at_end += late_[i];
     if (opt_.free_flow)
-      r_.free_flow_throughput = free_flow_throughput(grid_, dist_, tasks_, starts, steps, &start_head_);
+      r_.free_flow_throughput =
+          free_flow_throughput(grid_, dist_, tasks_, starts, steps, &start_head_, &r_.free_flow_errand_steps);
     r_.wall_time_s = seconds_since(t_start);
     return std::move(r_);
   }
@@ -161,6 +172,7 @@ class Run {
     for (int i = 0; i < n_; ++i) {
       still_[i] = (next_[i] == pos_[i] && next_[i] != goals_[i].front()) ? still_[i] + 1 : 0;
       r_.longest_wait = std::max(r_.longest_wait, still_[i]);
+      count_action(i);
     }
     pos_.swap(next_);
     head_.swap(next_head_);
@@ -170,7 +182,9 @@ class Run {
       if (errand_[i].front()) {
         ++r_.goals_reached;
         ++r_.goals_timeline[t / SimResult::kTimelineSteps];
+        add_leg(r_.errand_steps, leg_[i]);
       }
+      leg_[i] = {};
       goals_[i].erase(goals_[i].begin());
       errand_[i].erase(errand_[i].begin());
       hand_out_goal(i);
@@ -182,6 +196,20 @@ class Run {
       for (int i = 0; i < n_; ++i) r_.paths[i].push_back(pos_[i]);
     if (opt_.record_paths && rotation())
       for (int i = 0; i < n_; ++i) r_.headings[i].push_back(head_[i]);
+  }
+
+  // The action agent i takes this step, counted on its current goal's leg.
+  void count_action(int i) {
+    ErrandSteps& l = leg_[i];
+    ++l.steps;
+    if (next_[i] != pos_[i]) ++l.forward;
+    else if (rotation() && next_head_[i] != head_[i]) ++l.turns;
+    else ++l.waits;
+  }
+
+  static void add_leg(ErrandSteps& sum, const ErrandSteps& leg) {
+    ++sum.errands;
+    sum.steps += leg.steps, sum.forward += leg.forward, sum.turns += leg.turns, sum.waits += leg.waits;
   }
 
   // A goal is late once its agent has spent more than twice its shortest distance on it.
@@ -211,6 +239,7 @@ class Run {
   // is counted late, and how long the agent has stood still.
   std::vector<int> got_at_, still_, dist0_;
   std::vector<uint8_t> late_, ever_late_;
+  std::vector<ErrandSteps> leg_;  // per agent: the steps on its current goal so far
   double plan_sum_ = 0, wall_sum_ = 0, cpu_sum_ = 0;
 };
 
@@ -225,13 +254,14 @@ SimResult run_simulation(const Grid& grid, const DistTable& dist, TaskStream& ta
 
 namespace {
 // Rotation: walks `p` along a shortest path over (cell, heading) states to row's goal (forward
-// first among equally short actions) and returns its length.
-int walk_to_goal(const Grid& grid, const DistRow& row, Pose& p) {
+// first among equally short actions) and returns its length; *turns counts its turns.
+int walk_to_goal(const Grid& grid, const DistRow& row, Pose& p, int* turns) {
   int steps = 0;
   for (int d = row.at(p.cell, p.heading); d > 0; --d, ++steps) {
     for (Action a : {Action::kForward, Action::kClockwise, Action::kCounterClockwise}) {
       const Pose q = apply_action(grid, p, a);
       if (q.cell != kNoCell && row.at(q.cell, q.heading) == d - 1) {
+        *turns += a != Action::kForward;
         p = q;
         break;
       }
@@ -242,11 +272,13 @@ int walk_to_goal(const Grid& grid, const DistRow& row, Pose& p) {
 }  // namespace
 
 double free_flow_throughput(const Grid& grid, const DistTable& dist, const TaskStream& tasks,
-                            const std::vector<Cell>& starts, int steps, const std::vector<Heading>* start_headings) {
+                            const std::vector<Cell>& starts, int steps, const std::vector<Heading>* start_headings,
+                            ErrandSteps* errand_steps) {
+  if (errand_steps) *errand_steps = {};
   if (steps <= 0) return 0;
   if (dist.step_costs().any()) {  // the bound is over true shortest paths: every step costs 1
     const DistTable unit(grid, dist.action_model(), dist.budget_bytes());
-    return free_flow_throughput(grid, unit, tasks, starts, steps, start_headings);
+    return free_flow_throughput(grid, unit, tasks, starts, steps, start_headings, errand_steps);
   }
   const bool rotation = dist.action_model() == ActionModel::kRotation;
   auto replay = tasks.clone_fresh();
@@ -260,10 +292,16 @@ double free_flow_throughput(const Grid& grid, const DistTable& dist, const TaskS
       if (!replay->is_errand(i, g, cur)) break;  // no task to count
       int d = dist.get(g, cur);
       if (d >= kUnreachable) break;  // unreachable goal: the agent never gets there
-      if (rotation) d = walk_to_goal(grid, *dist.row(g), pose);
+      int turns = 0;
+      if (rotation) d = walk_to_goal(grid, *dist.row(g), pose, &turns);
       t += std::max(d, 1);
       if (t > steps) break;
       ++reached;
+      if (errand_steps) {
+        ErrandSteps& e = *errand_steps;
+        ++e.errands;
+        e.steps += std::max(d, 1), e.forward += d - turns, e.turns += turns, e.waits += std::max(d, 1) - d;
+      }
       cur = g;
     }
   }

@@ -222,6 +222,16 @@ class GreedyTurner : public Planner {
   nlohmann::json params() const override { return nlohmann::json::object(); }
 };
 
+// Rotation: turns or moves like GreedyTurner on odd timesteps, and waits on even ones.
+class Dawdler : public GreedyTurner {
+ public:
+  StepReport plan_step(const WorldView& w, std::vector<Cell>& next) override {
+    if (w.timestep % 2 == 1) return GreedyTurner::plan_step(w, next);
+    for (int i = 0; i < w.num_agents(); ++i) next[i] = w.positions[i], (*w.next_headings)[i] = (*w.headings)[i];
+    return {true, 0};
+  }
+};
+
 // Moves sideways, which the rotation model forbids.
 class Sidestepper : public GreedyTurner {
  public:
@@ -256,6 +266,39 @@ TEST(RotationSimulation, CarriesHeadingsCountsTurnsAndRecordsTheModel) {
   EXPECT_DOUBLE_EQ(r.free_flow_throughput, 2.0 / 14);
   DistTable flat(g);
   EXPECT_DOUBLE_EQ(free_flow_throughput(g, flat, tasks, {g.cell(0, 0)}, 14), 3.0 / 14);
+}
+
+TEST(RotationSimulation, ErrandStepsSplitIntoForwardMovesTurnsAndWaitsAgainstFreeFlow) {
+  const Grid g = Grid::from_rows({".....", "....."});
+  DistTable dist(g, ActionModel::kRotation);
+  ListStream tasks({{g.cell(4, 0), g.cell(0, 0)}});
+  SimOptions opt;
+  opt.steps = 14;
+  opt.action_model = ActionModel::kRotation;
+  GreedyTurner greedy;  // legs of 4 forward, then 2 turns and 4 forward: as in free flow
+  const SimResult r = run_simulation(g, dist, tasks, greedy, {g.cell(0, 0)}, opt);
+  EXPECT_EQ(r.errand_steps.errands, 2);
+  EXPECT_EQ(r.errand_steps.steps, 10);
+  EXPECT_EQ(r.errand_steps.forward, 8);
+  EXPECT_EQ(r.errand_steps.turns, 2);
+  EXPECT_EQ(r.errand_steps.waits, 0);
+  EXPECT_EQ(r.free_flow_errand_steps.errands, 2);
+  EXPECT_EQ(r.free_flow_errand_steps.steps, 10);
+  EXPECT_EQ(r.free_flow_errand_steps.forward, 8);
+  EXPECT_EQ(r.free_flow_errand_steps.turns, 2);
+  EXPECT_EQ(r.to_json()["errand_steps"]["reached"]["turns_per_errand"], 1.0);
+  // Waiting every other step: the first leg takes 8 steps, 4 of them waits; the second leg is
+  // not done in 14 steps and does not count.
+  Dawdler dawdler;
+  ListStream fresh({{g.cell(4, 0), g.cell(0, 0)}});
+  const SimResult d = run_simulation(g, dist, fresh, dawdler, {g.cell(0, 0)}, opt);
+  EXPECT_EQ(d.errand_steps.errands, 1);
+  EXPECT_EQ(d.errand_steps.steps, 8);
+  EXPECT_EQ(d.errand_steps.forward, 4);
+  EXPECT_EQ(d.errand_steps.turns, 0);
+  EXPECT_EQ(d.errand_steps.waits, 4);
+  EXPECT_EQ(d.to_json()["errand_steps"]["reached"]["waits_per_errand"], 4.0);
+  EXPECT_EQ(d.free_flow_errand_steps.steps, r.free_flow_errand_steps.steps);  // the same errands
 }
 
 TEST(RotationSimulation, StartHeadingsAreUsedAndCheckedAgainstTheFleet) {

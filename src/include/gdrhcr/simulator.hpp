@@ -31,6 +31,15 @@ struct SimOptions {
   bool free_flow = true;  // compute SimResult::free_flow_throughput (a distance row per goal)
 };
 
+// Where the steps of errands go: per errand, the steps from getting its goal to reaching it,
+// split into forward moves (a change of cell), turns (rotation: the heading changes in place)
+// and waits (neither). Summed over the errands reached.
+struct ErrandSteps {
+  long errands = 0;
+  long steps = 0, forward = 0, turns = 0, waits = 0;
+  nlohmann::json to_json() const;  // the sums per errand
+};
+
 struct SimResult {
   int steps = 0;
   int agents = 0;
@@ -51,6 +60,10 @@ struct SimResult {
   long late_at_end = 0;      // agents whose current goal is late when the run ends
   int longest_wait = 0;      // most consecutive steps an agent stood still off its goal
   double max_lateness = 0;   // largest (steps taken or elapsed) / shortest distance of a goal
+  // The errands reached, and the same agents' errands in free flow (each alone on shortest
+  // paths, as free_flow_throughput: no waits). Their difference per errand says where a run
+  // loses its throughput: longer ways (forward), more turns, or waits.
+  ErrandSteps errand_steps, free_flow_errand_steps;
   // Goals reached (errands) in each block of kTimelineSteps steps, the last block possibly short:
   // shows where a long run loses its throughput.
   static constexpr int kTimelineSteps = 100;
@@ -73,6 +86,7 @@ SimResult run_simulation(const Grid& grid, const DistTable& dist, TaskStream& ta
 // the paths are the shortest in steps.
 double free_flow_throughput(const Grid& grid, const DistTable& dist, const TaskStream& tasks,
                             const std::vector<Cell>& starts, int steps,
-                            const std::vector<Heading>* start_headings = nullptr);
+                            const std::vector<Heading>* start_headings = nullptr,
+                            ErrandSteps* errand_steps = nullptr);  // the free-flow errands' steps
 
 }  // namespace gdrhcr
