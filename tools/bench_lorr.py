@@ -6,8 +6,10 @@ For every instance and every budget it runs `scripts/bench_lorr.sh START_KIT INS
 BUDGET_MS` (the Start-Kit's own simulator, our planner as its MAPFPlanner) and reads back the
 Start-Kit's output (numTaskFinished, AllValid, errors, plannerTimes) and our own time per step
 (the adapter's clock, OUT.times). It prints, per instance, the errands at each budget against the
-best-known, with the mean, p99 and max ms per step we used, writes everything to a JSON file and
-plots errands against the budget (matplotlib; without it the plot is skipped, with a note).
+best-known, with the mean, p99 and max ms per step we used, and where each errand's steps went,
+from the Start-Kit's own paths and events: forward moves, turns and waits per finished task (the
+first task of each agent includes the warm-up). It writes everything to a JSON file and plots
+errands against the budget (matplotlib; without it the plot is skipped, with a note).
 
     /usr/bin/python3 tools/bench_lorr.py [--start-kit DIR] [--budgets 10 30 100 300 1000]
         [--steps N] [--out-dir DIR] [--json FILE] [--plot FILE.png] INSTANCE.json ...
@@ -50,6 +52,28 @@ def percentile(values, q):
     return s[min(len(s) - 1, int(q * len(s)))]
 
 
+def errand_steps(output):
+    """Per task the Start-Kit counts finished: the agent's actions from its assignment to its
+    finish (actualPaths and events of the Start-Kit's output), summed: forward moves (F), turns
+    (R, C) and waits (W, and the Start-Kit's own T for a step without a valid plan)."""
+    sums = {"errands": 0, "steps": 0, "forward": 0, "turns": 0, "waits": 0}
+    for path, events in zip(output.get("actualPaths", []), output.get("events", [])):
+        actions = path.split(",") if path else []
+        assigned = {}
+        for task, t, kind in events:
+            if kind == "assigned":
+                assigned[task] = t
+            elif kind == "finished" and task in assigned:
+                leg = actions[assigned.pop(task):t]
+                sums["errands"] += 1
+                sums["steps"] += len(leg)
+                sums["forward"] += leg.count("F")
+                sums["turns"] += leg.count("R") + leg.count("C")
+                sums["waits"] += len(leg) - leg.count("F") - leg.count("R") - leg.count("C")
+    n = max(1, sums["errands"])
+    return {"errands": sums["errands"], **{f"{k}_per_errand": sums[k] / n for k in ("steps", "forward", "turns", "waits")}}
+
+
 def run_one(kit, instance, steps, budget, out_dir):
     """One bench_lorr.sh run; returns its row (errands, validity, our and the Start-Kit's ms)."""
     name = os.path.splitext(os.path.basename(instance))[0]
@@ -71,6 +95,7 @@ def run_one(kit, instance, steps, budget, out_dir):
         "ms_mean": sum(ours) / len(ours) if ours else float("nan"), "ms_p99": percentile(ours, 0.99),
         "ms_max": max(ours, default=float("nan")), "start_kit_ms_mean": sum(kit_ms) / len(kit_ms) if kit_ms else float("nan"),
         "start_kit_ms_max": max(kit_ms, default=float("nan")), "output": out, "command": " ".join(cmd),
+        "errand_steps": errand_steps(r),
     }
 
 
@@ -140,6 +165,9 @@ def main(argv=None):
             print(f"{name:<12} {steps:>5} {budget:>9g} {row['errands']:>8} {best or '-':>10} {share:>6} "
                   f"{row['all_valid']:>5} {row['ms_mean']:>8.1f} {row['ms_p99']:>7.1f} {row['ms_max']:>7.1f}",
                   flush=True)
+            e = row["errand_steps"]
+            print(f"{'':<12} per errand: {e['steps_per_errand']:.1f} steps = {e['forward_per_errand']:.1f} forward"
+                  f" + {e['turns_per_errand']:.1f} turns + {e['waits_per_errand']:.1f} waits", flush=True)
     if a.json:
         os.makedirs(os.path.dirname(os.path.abspath(a.json)), exist_ok=True)
         with open(a.json, "w") as f:

@@ -49,10 +49,31 @@ class BenchLorrTest(unittest.TestCase):
             self.assertEqual(len(times), 20)  # one line per step
             self.assertLessEqual(row["ms_p99"], 50)
             self.assertIn("small", printed.getvalue())
+            # Where the errands' steps went, from the Start-Kit's own paths and events.
+            e = row["errand_steps"]
+            self.assertEqual(e["errands"], row["errands"])
+            self.assertAlmostEqual(e["steps_per_errand"],
+                                   e["forward_per_errand"] + e["turns_per_errand"] + e["waits_per_errand"])
+            self.assertGreaterEqual(e["forward_per_errand"], 1)
+            self.assertIn("per errand:", printed.getvalue())
             self.assertTrue(os.path.getsize(png) > 0)
             # The offline preparation was made in the run's preprocessing and cached.
             self.assertIn(row["prep_traffic_cost"], (0.0, 2.0))
             self.assertEqual(len([f for f in os.listdir(os.path.join(tmp, "prep")) if f.startswith("gdrhcr-prep-")]), 1)
+
+    def test_errand_steps_split_the_actions_between_assignment_and_finish(self):
+        output = {"actualPaths": ["F,R,F,W,F,C,W", "W,W"],
+                  "events": [[[0, 0, "assigned"], [0, 4, "finished"], [2, 4, "assigned"], [2, 6, "finished"],
+                              [3, 6, "assigned"]],
+                             [[1, 0, "assigned"]]]}
+        e = bench_lorr.errand_steps(output)
+        # Task 0: F R F W (2 forward, 1 turn, 1 wait); task 2: F C; task 3 and task 1 unfinished.
+        self.assertEqual(e["errands"], 2)
+        self.assertEqual(e["steps_per_errand"], 3.0)
+        self.assertEqual(e["forward_per_errand"], 1.5)
+        self.assertEqual(e["turns_per_errand"], 1.0)
+        self.assertEqual(e["waits_per_errand"], 0.5)
+        self.assertEqual(bench_lorr.errand_steps({})["errands"], 0)
 
     def test_bad_arguments_are_named(self):
         for args, word in ((["--budgets", "0", SMALL], "--budgets"), (["--steps", "0", SMALL], "--steps"),
