@@ -28,7 +28,7 @@ static double process_cpu_s() {
 nlohmann::json ErrandSteps::to_json() const {
   const double n = errands > 0 ? double(errands) : 1.0;
   return {{"errands", errands},
-          {"steps_per_errand", steps / n},
+          {"steps_per_errand", steps() / n},
           {"forward_per_errand", forward / n},
           {"turns_per_errand", turns / n},
           {"waits_per_errand", waits / n}};
@@ -201,7 +201,6 @@ class Run {
   // The action agent i takes this step, counted on its current goal's leg.
   void count_action(int i) {
     ErrandSteps& l = leg_[i];
-    ++l.steps;
     if (next_[i] != pos_[i]) ++l.forward;
     else if (rotation() && next_head_[i] != head_[i]) ++l.turns;
     else ++l.waits;
@@ -209,7 +208,7 @@ class Run {
 
   static void add_leg(ErrandSteps& sum, const ErrandSteps& leg) {
     ++sum.errands;
-    sum.steps += leg.steps, sum.forward += leg.forward, sum.turns += leg.turns, sum.waits += leg.waits;
+    sum.forward += leg.forward, sum.turns += leg.turns, sum.waits += leg.waits;
   }
 
   // A goal is late once its agent has spent more than twice its shortest distance on it.
@@ -300,7 +299,7 @@ double free_flow_throughput(const Grid& grid, const DistTable& dist, const TaskS
       if (errand_steps) {
         ErrandSteps& e = *errand_steps;
         ++e.errands;
-        e.steps += std::max(d, 1), e.forward += d - turns, e.turns += turns, e.waits += std::max(d, 1) - d;
+        e.forward += d - turns, e.turns += turns, e.waits += std::max(d, 1) - d;
       }
       cur = g;
     }

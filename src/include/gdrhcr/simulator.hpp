@@ -36,7 +36,8 @@ struct SimOptions {
 // and waits (neither). Summed over the errands reached.
 struct ErrandSteps {
   long errands = 0;
-  long steps = 0, forward = 0, turns = 0, waits = 0;
+  long forward = 0, turns = 0, waits = 0;
+  long steps() const { return forward + turns + waits; }
   nlohmann::json to_json() const;  // the sums per errand
 };
 
