@@ -22,49 +22,9 @@ Example (docs/results.md, session 23):
 """
 import argparse
 import json
-import re
 import sys
 
-CELL = re.compile(r"\((\d+),(\d+)\)")
-BLOCKED = set("@TOW")  # MovingAI's obstacles; every other letter is passable, as in grid.cpp
-
-
-def read_map(path):
-    """(width, height, rows) of a MovingAI map; raises ValueError naming what is wrong."""
-    with open(path) as f:
-        lines = f.read().split("\n")
-    try:
-        if not lines[0].startswith("type"):
-            raise ValueError("first line is not 'type ...'")
-        height = int(lines[1].split()[1])
-        width = int(lines[2].split()[1])
-        if lines[3].strip() != "map":
-            raise ValueError("fourth line is not 'map'")
-    except (IndexError, ValueError) as e:
-        raise ValueError(f"{path}: not a MovingAI map header ({e})") from None
-    rows = lines[4:4 + height]
-    if len(rows) < height or any(len(r) < width for r in rows):
-        raise ValueError(f"{path}: fewer than {height} rows of {width} cells")
-    return width, height, rows
-
-
-def read_paths(path, width, height):
-    """One list of (x, y) per agent, all of the same length; raises ValueError on a bad line."""
-    paths = []
-    with open(path) as f:
-        for n, line in enumerate(f, 1):
-            if not line.strip():
-                continue
-            head, sep, rest = line.partition(":")
-            if not sep or not head.strip().isdigit() or int(head) != len(paths):
-                raise ValueError(f"{path}:{n}: expected 'agent: (x,y),...' for agent {len(paths)}")
-            cells = [(int(x), int(y)) for x, y in CELL.findall(rest)]
-            if not cells or any(x >= width or y >= height for x, y in cells):
-                raise ValueError(f"{path}:{n}: no cells, or a cell outside the {width} x {height} map")
-            paths.append(cells)
-    if not paths or len({len(p) for p in paths}) != 1:
-        raise ValueError(f"{path}: no agents, or paths of different lengths")
-    return paths
+from grid_files import BLOCKED, read_map, read_paths
 
 
 def moving_share(paths, window):
@@ -176,8 +136,8 @@ def main(argv=None):
     if args.window < 1 or args.block < 1 or args.clusters < 0:
         ap.error("--window and --block must be at least 1, --clusters at least 0")
     try:
-        width, height, rows = read_map(args.map)
-        paths = read_paths(args.paths, width, height)
+        rows = read_map(args.map)
+        paths = read_paths(args.paths, len(rows[0]), len(rows))
         result = report(rows, paths, args.at, args.window, args.block, args.clusters)
     except (OSError, ValueError) as e:
         print(f"jam_report: {e}", file=sys.stderr)

@@ -7,7 +7,6 @@ shortest-path distance V are linked by lines, and each group (connected componen
     tools/plot_groups.py --map maps/empty-48-48.map --paths /tmp/p.txt --step 10 --V 2 --out groups.png
 """
 import argparse
-import re
 import sys
 from collections import deque
 
@@ -16,29 +15,14 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-BLOCKED = set("@TOW")
+from grid_files import BLOCKED, read_map, read_paths  # noqa: E402
 
 
-def read_map(path):
-    with open(path) as f:
-        lines = [l.rstrip("\r\n") for l in f]
-    if lines and lines[0].startswith("type"):
-        rows = lines[lines.index("map") + 1:]
-    else:  # kiva: 4 header lines
-        rows = lines[4:]
-    return [r for r in rows if r]
-
-
-def read_positions(path, step):
-    pos = []
-    for line in open(path):
-        if ":" not in line:
-            continue
-        cells = re.findall(r"\((\d+),(\d+)\)", line)
-        if step >= len(cells):
-            raise SystemExit("plot_groups: the paths file has only %d steps" % (len(cells) - 1))
-        pos.append(tuple(map(int, cells[step])))
-    return pos
+def read_positions(path, step, width, height):
+    paths = read_paths(path, width, height)
+    if step >= len(paths[0]):
+        raise SystemExit("plot_groups: the paths file has only %d steps" % (len(paths[0]) - 1))
+    return [p[step] for p in paths]
 
 
 def groups(rows, pos, V):
@@ -81,7 +65,7 @@ def main(argv=None):
     ap.add_argument("--out", required=True)
     args = ap.parse_args(argv)
     rows = read_map(args.map)
-    pos = read_positions(args.paths, args.step)
+    pos = read_positions(args.paths, args.step, len(rows[0]), len(rows))
     comp, links = groups(rows, pos, args.V)
     h, w = len(rows), len(rows[0])
     fig, ax = plt.subplots(figsize=(max(4, w / 8), max(4, h / 8)))
