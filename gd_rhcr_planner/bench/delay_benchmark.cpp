@@ -12,6 +12,8 @@
 // --between 1 (default): moves are dispatched the moment the robots ahead have left (the node's
 // dispatch timer, Executor::advance after every substep); 0: at ticks only. --revoke 1 (default):
 // moves queued behind late robots are taken back and planned again (ExecutorConfig); 0: kept.
+// --catch-up N (default 100, the node's): steps a robot that lost time to a delay may make up,
+// one extra move per tick along its planned path (ExecutorConfig::catch_up); 0: off.
 // --step-ticks M: a planning step stands for M ticks of the delay process (LoRR 2026's moves of 3
 // ticks: --step-ticks 3 --speed 10); delays start with p_delay per tick and last 1..D ticks.
 // --late N: robots 0..N-1 are off the floor (they never reported) until --join-tick; then they
@@ -39,7 +41,7 @@ namespace {
 
 struct Options {
   std::string map = "maps/warehouse-10-20-10-2-1.map", planner = "gd-rhcr";
-  int robots = 300, ticks = 300, max_delay = 20, speed = 6, seeds = 1, commit_horizon = 2, between = 1, revoke = 1;  // the node's defaults
+  int robots = 300, ticks = 300, max_delay = 20, speed = 6, seeds = 1, commit_horizon = 2, between = 1, revoke = 1, catch_up = 100;  // the node's defaults
   int late = 0, join_tick = 50;  // robots 0..late-1 are off the floor until join_tick
   int step_ticks = 1;            // ticks of the delay process per planning step (DelayedFleet::ticks_per_step)
   double p_delay = 0.01;
@@ -66,7 +68,7 @@ struct Result {
   long why_samples = 0;
   int goals = 0;
   double delayed = 0, waiting = 0, held = 0, moves = 0;  // per tick
-  long revoked = 0;
+  long revoked = 0, caught_up = 0;
   std::string error;
 };
 
@@ -138,6 +140,7 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
   ExecutorConfig cfg;
   cfg.commit_horizon = o.commit_horizon;
   cfg.revoke_behind_late = o.revoke != 0;
+  cfg.catch_up = o.catch_up;
   Executor ex(g, dist, o.robots, cfg);
   DelayedFleet fleet(g, o.robots, seed, o.speed, o.speed);
   for (int i = 0; i < o.late; ++i) fleet.robots()[i].missing = true;
@@ -173,11 +176,12 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
     r.waiting += out.waiting;
     r.held += out.held;
     r.revoked += out.revoked;
+    r.caught_up += out.caught_up;
   }
   for (const SimRobot& s : fleet.robots()) r.moves += s.moves;
   planner.wait_idle();
   if (std::getenv("DELAY_BENCH_STATS"))
-    std::fprintf(stderr, "p %.3f: revoked %ld; %s\n", p_delay, r.revoked, planner.primary().stats().dump().c_str());
+    std::fprintf(stderr, "p %.3f: revoked %ld, catch-up moves %ld; %s\n", p_delay, r.revoked, r.caught_up, planner.primary().stats().dump().c_str());
   if (why) {
     std::fprintf(stderr, "p %g, robots per substep:", p_delay);
     for (int w = 0; w < kWhyCount; ++w) std::fprintf(stderr, " %s %.1f", kWhyName[w], r.why[w] / r.why_samples);
@@ -204,6 +208,7 @@ Options read_options(const BenchOptions& cl) {
   o.commit_horizon = static_cast<int>(cl.integer("commit-horizon", o.commit_horizon, 1, 1000));
   o.between = static_cast<int>(cl.integer("between", o.between, 0, 1));
   o.revoke = static_cast<int>(cl.integer("revoke", o.revoke, 0, 1));
+  o.catch_up = static_cast<int>(cl.integer("catch-up", o.catch_up, 0, 1000));
   o.late = static_cast<int>(cl.integer("late", o.late, 0, o.robots));
   o.join_tick = static_cast<int>(cl.integer("join-tick", o.join_tick, 0, 10000000));
   o.step_ticks = static_cast<int>(cl.integer("step-ticks", o.step_ticks, 1, SimRobot::kSub));
@@ -231,13 +236,14 @@ void print_usage() {
       "  --commit-horizon H    moves a robot may have committed and not finished, >= 1 (%d)\n"
       "  --between 0|1         dispatch on arrival between ticks (%d)\n"
       "  --revoke 0|1          take back moves queued behind late robots (%d)\n"
+      "  --catch-up N          steps a robot that lost time to a delay may make up, 0..1000, 0 = off (%d)\n"
       "  --late N              robots 0..N-1 are off the floor (never reported) until --join-tick, 0..robots (%d)\n"
       "  --join-tick T         the tick at which they report (%d)\n"
       "  --step-ticks M        ticks of the delay process per planning step, 1..%d: a step stands for M ticks\n"
       "                        (moves of M ticks with --speed %d); p-delay and max-delay are per tick (%d)\n"
       "  --param key=value     a planner parameter (repeatable)\n",
       d.map.c_str(), d.planner.c_str(), d.robots, d.ticks, d.p_delay, d.max_delay, SimRobot::kSub, d.speed, d.seeds,
-      d.commit_horizon, d.between, d.revoke, d.late, d.join_tick, SimRobot::kSub, SimRobot::kSub, d.step_ticks);
+      d.commit_horizon, d.between, d.revoke, d.catch_up, d.late, d.join_tick, SimRobot::kSub, SimRobot::kSub, d.step_ticks);
 }
 
 // Both runs of every seed and the figures; returns the exit code.
@@ -246,9 +252,10 @@ int run_all(const Options& o) {
   if (o.robots > static_cast<int>(map.grid.free_cells().size()))
     throw BenchOptionError("--robots " + std::to_string(o.robots) + ": the map has " +
                            std::to_string(map.grid.free_cells().size()) + " free cells");
-  std::printf("map %s, %d robots, planner %s, ADG execution (commit horizon %d, dispatch %s), %d ticks, moves take %.1f tick, "
-              "delays p %g per tick of 1..%d ticks, random goals\n",
-              o.map.c_str(), o.robots, o.planner.c_str(), o.commit_horizon, o.between ? "on arrival" : "at ticks", o.ticks,
+  std::printf("map %s, %d robots, planner %s, ADG execution (commit horizon %d, dispatch %s, catch-up %d), %d ticks, "
+              "moves take %.1f tick, delays p %g per tick of 1..%d ticks, random goals\n",
+              o.map.c_str(), o.robots, o.planner.c_str(), o.commit_horizon, o.between ? "on arrival" : "at ticks",
+              o.catch_up, o.ticks,
               o.speed / double(SimRobot::kSub), o.p_delay, o.max_delay);
   if (o.late > 0) std::printf("robots 0..%d join at tick %d\n", o.late - 1, o.join_tick);
   if (o.step_ticks > 1) std::printf("a planning step stands for %d ticks of the delay process\n", o.step_ticks);
@@ -277,7 +284,7 @@ int run_all(const Options& o) {
 int main(int argc, char** argv) {
   try {
     const BenchOptions cl(argc, argv, {"map", "planner", "robots", "ticks", "p-delay", "max-delay", "speed", "seeds",
-                                       "commit-horizon", "between", "revoke", "late", "join-tick", "step-ticks", "param"});
+                                       "commit-horizon", "between", "revoke", "catch-up", "late", "join-tick", "step-ticks", "param"});
     if (cl.help()) {
       print_usage();
       return 0;

@@ -413,6 +413,7 @@ int Executor::revoke(int r) {
   Track& t = tracks_[r];
   const size_t keep = t.dispatched ? 1 : 0;
   if (t.path.size() <= keep) return 0;
+  t.revoked = ticks_;
   for (size_t k = t.path.size(); k-- > keep;) {  // r's last visit of each dropped cell goes
     if (t.path[k].cell == (k == 0 ? t.cell : t.path[k - 1].cell)) continue;  // a turn: no visit
     auto it = visits_.find(t.path[k].cell);
@@ -664,6 +665,7 @@ void Executor::commit_step(StepInput& in, std::vector<Cell>& next, TickOutput& o
     if (to.cell == positions[a] && (!rot || to.heading == in.headings[a])) continue;
     const int r = out.robot_of_agent[a];
     tracks_[r].path.push_back(to);
+    tracks_[r].stepped = steps_;
     if (to.cell != positions[a]) visits_[to.cell].push_back(r);
   }
 }
@@ -696,6 +698,9 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
   dispatch_ready(out, ticks_, held);
   if (cfg_.revoke_behind_late) out.revoked = revoke_behind_late();
   plan_and_commit(goals, held, planner, out);
+  if (cfg_.catch_up > 0 && !rotation() && out.plan_error.empty() && out.planner_called && !out.outcome.fallback &&
+      planner.primary_idle())
+    catch_up(goals, held, planner.primary(), out);
   dispatch_ready(out, ticks_, held);
   out.stepped = true;
   out.cells.assign(n, kNoCell);
@@ -717,6 +722,58 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
     if (t.health == RobotHealth::kOk && !t.dispatched && !t.path.empty() && !on_hold(held, r)) ++out.waiting;
   }
   return out;
+}
+
+// Catch-up (ExecutorConfig::catch_up), after the tick's step. A robot is owed a step for each
+// tick it is late, its commitments are taken back behind a late robot, or it gets no move while
+// it stands next to a late robot. A robot owed steps that is not late itself, with fewer than
+// commit_horizon moves committed, makes one more move this tick, into the cell the planner means
+// it to enter next (Planner::intended_next), when no robot ends its commitments there and the cell
+// is not blocked. The ADG orders it like any other commitment; the planner's clock does not move.
+void Executor::catch_up(const std::vector<std::vector<Cell>>& goals, const std::vector<uint8_t>& hold,
+                        const gdrhcr::Planner& planner, TickOutput& out) {
+  const int n = num_robots();
+  std::vector<uint8_t> late_at(grid_.num_cells(), 0);
+  for (const Track& t : tracks_)
+    if (t.active && t.dispatched && t.dispatched_at < ticks_) late_at[t.cell] = 1;
+  std::vector<uint8_t> owing(n, 0);
+  bool any = false;
+  for (int r = 0; r < n; ++r) {
+    Track& t = tracks_[r];
+    if (!t.active || t.health != RobotHealth::kOk || on_hold(hold, r)) {
+      t.owed = 0;
+      continue;
+    }
+    const bool late = t.dispatched && t.dispatched_at < ticks_;
+    bool beside_late = false;
+    if (t.stepped != steps_)
+      for (Cell c : grid_.neighbours(t.cell)) beside_late = beside_late || late_at[c];
+    if (late || t.revoked == ticks_ || beside_late) t.owed = std::min(cfg_.catch_up, t.owed + 1);
+    owing[r] = !late && t.owed > 0 && static_cast<int>(t.path.size()) < cfg_.commit_horizon;
+    any = any || owing[r];
+  }
+  if (!any) return;
+  TickOutput extra;
+  StepInput in;
+  gather_agents(goals, hold, in, extra);
+  std::vector<uint8_t> taken(grid_.num_cells(), 0);
+  for (const auto* cells : {&in.positions, &in.obstacles, &in.blocked, &in.late_cells})
+    for (Cell c : *cells) taken[c] = 1;
+  std::vector<Cell> next = in.positions;
+  for (int a = 0; a < static_cast<int>(next.size()); ++a) {
+    in.immovable[a] = !owing[extra.robot_of_agent[a]];
+    if (in.immovable[a]) continue;
+    const Cell c = planner.intended_next(a, in.positions[a]);
+    if (c == kNoCell || taken[c] || !grid_.step_allowed(in.positions[a], c)) continue;
+    taken[c] = 1;
+    next[a] = c;
+  }
+  const uint64_t step = steps_;
+  commit_step(in, next, extra);
+  for (int r = 0; r < n; ++r)
+    if (owing[r] && tracks_[r].stepped == steps_) --tracks_[r].owed, ++out.caught_up;
+  steps_ = step;
+  if (!extra.plan_error.empty()) out.plan_error = extra.plan_error;
 }
 
 std::string Executor::debug_queue(Cell c) const {

@@ -41,6 +41,7 @@ void FleetConfig::validate() {
   if (num_robots < 1) throw gdrhcr::ParamError("~num_robots must be >= 1");
   if (dist_budget_mb < 1) throw gdrhcr::ParamError("~dist_budget_mb must be >= 1");
   if (commit_horizon < 1) throw gdrhcr::ParamError("~commit_horizon must be >= 1");
+  if (catch_up < 0) throw gdrhcr::ParamError("~catch_up must be >= 0 (0 = off)");
   parse_dispatch_policy(dispatcher);  // throws naming a bad value
   dispatch.validate();
   gdrhcr::planner_param_specs(planner);  // throws naming an unknown planner
@@ -107,6 +108,7 @@ FleetManager::FleetManager(const gdrhcr::Grid& grid, FleetConfig cfg, Log sink)
   fleet_->set_auto_assign(false);  // the dispatcher assigns
   ExecutorConfig ec;
   ec.commit_horizon = cfg_.commit_horizon;
+  ec.catch_up = cfg_.catch_up;
   ec.plan_deadline_s = cfg_.plan_deadline;
   ec.dist_budget_bytes = size_t(cfg_.dist_budget_mb) << 20;
   ec.action_model = cfg_.model();
@@ -524,6 +526,7 @@ TickResult FleetManager::tick(double now, double wall, bool view) {
   executor_->set_plan_deadline(cfg_.plan_deadline);
   const TickOutput exec = executor_->tick(in.robots, in.goals, *planner_, in.proceed_without_missing, &in.held);
   std::lock_guard<std::mutex> lock(mutex_);
+  catch_up_moves_ += exec.caught_up;
   if (!exec.stepped) {
     ++skipped_;
     problem_locked(exec.skip_reason);
@@ -799,8 +802,10 @@ Health FleetManager::diagnose(double wall, std::vector<std::pair<std::string, st
   add_i("rejected tasks", rejected_tasks_);
   add("last rejected task", last_rejected_task_.empty() ? "none" : last_rejected_task_);
   add("execution", "adg, commit horizon " + std::to_string(cfg_.commit_horizon) +
-                       (cfg_.dispatch_rate > 0 ? ", dispatch on arrival" : ", dispatch at ticks"));
+                       (cfg_.dispatch_rate > 0 ? ", dispatch on arrival" : ", dispatch at ticks") +
+                       (cfg_.catch_up > 0 ? ", catch-up " + std::to_string(cfg_.catch_up) : ", no catch-up"));
   add_i("moves dispatched between ticks", early_dispatches_);
+  add_i("moves made to catch up after delays", catch_up_moves_);
   // Memory that grows by design up to a bound: the distance rows (dist_budget_mb) and the
   // finished tasks kept for list_tasks.
   add_i("distance rows cached", dist_->cached_rows());
@@ -834,7 +839,7 @@ const std::vector<std::string>& node_param_names() {
   static const std::vector<std::string> names = {
       "map", "planner", "frame_id", "cell_size", "tick_rate", "num_robots", "seed", "per_robot_topics",
       "publish_markers", "label_limit", "dist_budget_mb", "plan_deadline", "offline_timeout", "commit_horizon",
-      "dispatch_rate", "show_goal_lines", "dispatcher", "dispatch_finish_horizon", "dispatch_switch_margin",
+      "catch_up", "dispatch_rate", "show_goal_lines", "dispatcher", "dispatch_finish_horizon", "dispatch_switch_margin",
       "dispatch_max_tasks", "dispatch_age_weight", "task_store", "planner_params", "action_model",
       "prep_file"};
   return names;

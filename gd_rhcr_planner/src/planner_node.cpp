@@ -123,6 +123,7 @@ FleetConfig PlannerNode::load_config() {
   pnh_.param("plan_deadline", c.plan_deadline, 0.0);
   pnh_.param("offline_timeout", c.offline_timeout, c.offline_timeout);
   pnh_.param("commit_horizon", c.commit_horizon, c.commit_horizon);
+  pnh_.param("catch_up", c.catch_up, c.catch_up);
   pnh_.param("dispatch_rate", c.dispatch_rate, c.dispatch_rate);
   pnh_.param("dispatcher", c.dispatcher, c.dispatcher);
   pnh_.param("dispatch_finish_horizon", c.dispatch.finish_horizon, c.dispatch.finish_horizon);

@@ -25,11 +25,13 @@ using gdrhcr::kNoCell;
 
 namespace {
 
-// Plans whatever the test's function says.
+// Plans whatever the test's function says (and, for catch-up, intends what `intends` says).
 class FnPlanner : public gdrhcr::Planner {
  public:
   std::function<void(const gdrhcr::WorldView&, std::vector<Cell>&)> fn;
+  std::function<Cell(int, Cell)> intends;
   std::string name() const override { return "fn"; }
+  Cell intended_next(int agent, Cell at) const override { return intends ? intends(agent, at) : kNoCell; }
   gdrhcr::StepReport plan_step(const gdrhcr::WorldView& w, std::vector<Cell>& next) override {
     next = w.positions;
     if (fn) fn(w, next);
@@ -160,6 +162,7 @@ namespace {
 
 struct SimResult {
   int goals = 0, goals_tail = 0, ticks = 0;
+  int caught_up = 0;                      // catch-up moves (ExecutorConfig::catch_up)
   std::vector<RobotHealth> final_health;  // per robot, at the last tick
   std::vector<int> moves_tail;  // moves per robot after the delays stopped
   int max_wait_tail = 0;        // longest stretch a healthy robot waited on a committed move, tail
@@ -180,13 +183,15 @@ const Grid& small_warehouse() {
 // Runs `ticks` ticks with delays, then `tail` ticks without.
 SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int ticks, int tail, double p_delay,
                     int max_delay, const std::function<void(int, DelayedFleet&)>& faults = nullptr,
-                    int commit_horizon = 1, bool between = false, const std::vector<int>& restarts = {}) {
+                    int commit_horizon = 1, bool between = false, const std::vector<int>& restarts = {},
+                    int catch_up = 0, int max_speed = 14) {
   const Grid& g = small_warehouse();
   gdrhcr::DistTable dist(g);
   gdrhcr::Params params, none;
   if (planner_name == "gd-rhcr") params.set("timeout", "1"), params.set("node-budget", "2000");
   ExecutorConfig cfg;
   cfg.commit_horizon = commit_horizon;
+  cfg.catch_up = catch_up;
   std::unique_ptr<DeadlinePlanner> planner_ptr;
   std::unique_ptr<Executor> ex_ptr;
   // A fresh planner and executor (a restarted planner process) know nothing of the moves made.
@@ -196,7 +201,7 @@ SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int t
     ex_ptr = std::make_unique<Executor>(g, dist, n, cfg);
   };
   start();
-  DelayedFleet sim(g, n, seed);
+  DelayedFleet sim(g, n, seed, 3, max_speed);
   // Dispatch on arrival: the executor sees the robots' reports after every substep, and the ADG
   // invariants hold after each of those dispatches too.
   DelayedFleet::Between on_arrival = [&](const std::vector<RobotRecord>& reports) {
@@ -220,6 +225,7 @@ SimResult run_fleet(const std::string& planner_name, int n, uint64_t seed, int t
     if (t >= ticks) res.goals_tail += reached;
     auto out = ex.tick(sim.records(), goals, planner, true);
     EXPECT_TRUE(out.stepped) << out.skip_reason;
+    res.caught_up += out.caught_up;
     if (std::getenv("EXEC_DEBUG"))
       for (auto& w : out.warnings) fprintf(stderr, "seed %lu t=%d %s\n", (unsigned long)seed, t, w.c_str());
     EXPECT_EQ(out.plan_error, "") << "seed " << seed << " tick " << t;
@@ -297,6 +303,109 @@ TEST(ExecutorAdg, RandomDelaysNeverCollideNorDeadlock_DispatchOnArrival) {
       EXPECT_LE(r.max_wait_tail, 30) << planner << " seed " << seed;
     }
   }
+}
+
+// The same with catch-up (the node's default): robots that lost time make extra moves along their
+// planned paths. Still no collision and no deadlock. A robot is owed steps only for time lost:
+// without delays, in a fleet whose moves all take less than a tick, nobody is (robots slower than
+// a tick are late at every move, and owed steps).
+TEST(ExecutorAdg, RandomDelaysNeverCollideNorDeadlock_CatchUp) {
+  for (uint64_t seed = 1; seed <= seeds(12); ++seed) {
+    for (const char* planner : {"pibt", "gd-rhcr"}) {
+      if (std::string(planner) == "gd-rhcr" && seed > 6) continue;
+      const SimResult r = run_fleet(planner, 30, seed, 150, 60, 0.05, 20, nullptr, 2, true, {}, 100);
+      if (HasFailure()) return;
+      EXPECT_GT(r.goals_tail, 0) << planner << " seed " << seed;
+      EXPECT_LE(r.max_wait_tail, 30) << planner << " seed " << seed;
+      if (std::string(planner) == "gd-rhcr") EXPECT_GT(r.caught_up, 0) << "seed " << seed;
+    }
+  }
+  const SimResult calm = run_fleet("gd-rhcr", 30, 1, 100, 0, 0.0, 20, nullptr, 2, true, {}, 100, 9);
+  EXPECT_GT(calm.goals, 0);
+  EXPECT_EQ(calm.caught_up, 0) << "no delay, nothing owed";
+}
+
+// Catch-up, step by step: robot 0 is late for two ticks (its queued move is taken back), then
+// arrives with nothing committed. In that tick it gets its planned move and, owed steps, one more
+// along the planner's intended path, so it is two cells on at once; without catch-up only one.
+// Robot 1, which never lost time, gets no extra move, and nobody is sent towards a cell another
+// robot's commitments end in.
+TEST(ExecutorAdg, ARobotThatLostTimeMakesItUpAlongItsPlannedPath) {
+  const Grid g = Grid::from_rows({"........", "........"});
+  gdrhcr::DistTable dist(g);
+  for (int catch_up : {0, 100}) {
+    FnPlanner* fn;
+    auto planner = make_fn_planner(g, 2, &fn);
+    ExecutorConfig cfg;
+    cfg.commit_horizon = 2;
+    cfg.catch_up = catch_up;
+    Executor ex(g, dist, 2, cfg);
+    std::vector<RobotRecord> robots{at(g, 0, 0), at(g, 0, 1)};
+    int step = 0;
+    fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
+      ++step;
+      for (int a = 0; a < 2; ++a) {
+        if (w.is_immovable(a)) continue;
+        if (a == 0 && step == 3) continue;  // robot 0 is planned to wait while it is late
+        const int x = g.x_of(w.positions[a]);
+        if (x + 1 < g.width()) next[a] = g.cell(x + 1, g.y_of(w.positions[a]));
+      }
+    };
+    fn->intends = [&](int, Cell c) { return g.x_of(c) + 1 < g.width() ? c + 1 : kNoCell; };
+    auto out = ex.tick(robots, stay_goals(robots), *planner, false);  // tick 1: both sent east
+    EXPECT_EQ(out.command[0], g.cell(1, 0));
+    EXPECT_EQ(out.caught_up, 0) << "nobody has lost time";
+    robots[0].moving = true;  // tick 2: robot 0 is late; robot 1 arrived
+    robots[1] = at(g, 1, 1);
+    out = ex.tick(robots, stay_goals(robots), *planner, false);
+    EXPECT_EQ(out.caught_up, 0) << "a late robot makes no extra move";
+    robots[1] = at(g, 2, 1);
+    out = ex.tick(robots, stay_goals(robots), *planner, false);  // tick 3: still late
+    EXPECT_EQ(out.revoked, 1);
+    EXPECT_EQ(out.caught_up, 0);
+    robots[0] = at(g, 1, 0);  // tick 4: arrived, nothing committed any more
+    robots[1] = at(g, 3, 1);
+    out = ex.tick(robots, stay_goals(robots), *planner, false);
+    EXPECT_EQ(ex.check_invariants(), "");
+    EXPECT_EQ(out.command[0], g.cell(2, 0));
+    if (catch_up > 0) {
+      EXPECT_EQ(out.caught_up, 1);
+      EXPECT_EQ(ex.committed(0), (std::vector<Cell>{g.cell(2, 0), g.cell(3, 0)})) << "two cells on in one tick";
+    } else {
+      EXPECT_EQ(out.caught_up, 0);
+      EXPECT_EQ(ex.committed(0), std::vector<Cell>{g.cell(2, 0)});
+    }
+    EXPECT_EQ(ex.committed(1).size(), 1u) << "robot 1 never lost time";
+  }
+}
+
+// Catch-up never sends a robot into a cell another robot's commitments end in: robot 0 is owed
+// steps, but the cell its planner intends next is where robot 1 ends; it makes no extra move.
+TEST(ExecutorAdg, CatchUpKeepsOutOfCellsOthersEndIn) {
+  const Grid g = Grid::from_rows({"......"});
+  gdrhcr::DistTable dist(g);
+  FnPlanner* fn;
+  auto planner = make_fn_planner(g, 2, &fn);
+  ExecutorConfig cfg;
+  cfg.commit_horizon = 2;
+  cfg.catch_up = 100;
+  Executor ex(g, dist, 2, cfg);
+  std::vector<RobotRecord> robots{at(g, 0, 0), at(g, 3, 0)};
+  int step = 0;
+  fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
+    if (++step == 1 || step == 4) next[0] = w.positions[0] + 1;  // robot 0 east; robot 1 stays
+  };
+  fn->intends = [&](int agent, Cell c) { return agent == 0 ? c + 1 : kNoCell; };
+  ex.tick(robots, stay_goals(robots), *planner, false);
+  robots[0].moving = true;
+  ex.tick(robots, stay_goals(robots), *planner, false);
+  ex.tick(robots, stay_goals(robots), *planner, false);
+  robots[0] = at(g, 1, 0);
+  auto out = ex.tick(robots, stay_goals(robots), *planner, false);  // robot 0 to (2,0); (3,0) is robot 1's
+  EXPECT_EQ(out.command[0], g.cell(2, 0));
+  EXPECT_EQ(out.caught_up, 0);
+  EXPECT_EQ(ex.committed(0), std::vector<Cell>{g.cell(2, 0)});
+  EXPECT_EQ(ex.check_invariants(), "");
 }
 
 // Bad robots: robot 0 never reports (not on the floor), robot 1 falls silent mid-move for good,

@@ -157,6 +157,14 @@ TEST(FleetManager, UnknownOrBadPlannerParametersAreErrorsNamingThem) {
   FleetConfig t = config("pibt", 2);
   t.tick_rate = 0;
   EXPECT_THROW(FleetManager(g, t), gdrhcr::ParamError);
+  FleetConfig u = config("pibt", 2);
+  u.catch_up = -1;
+  try {
+    FleetManager fm(g, u);
+    FAIL() << "a negative catch_up was accepted";
+  } catch (const gdrhcr::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("~catch_up"), std::string::npos) << e.what();
+  }
 }
 
 TEST(FleetManager, NodeParameterNamesAreCheckedAgainstTheTables) {

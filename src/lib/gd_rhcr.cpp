@@ -313,6 +313,12 @@ std::vector<Cell> GdRhcrPlanner::planned_path(int agent) const {
   return std::vector<Cell>(path.begin() + from, path.end());
 }
 
+Cell GdRhcrPlanner::intended_next(int agent, Cell at) const {
+  if (!guidance_) return Planner::intended_next(agent, at);
+  const std::vector<Cell> path = guidance_->path_from(agent, now_);
+  return path.size() >= 3 && path[1] == at && path[2] != at ? path[2] : kNoCell;
+}
+
 // Algorithm 1's lazy test: replan when the agents' plans come from different solves (someone
 // joined), when the plan is exhausted, and also, beyond the paper, when an agent is not where
 // its plan says (a lagging robot) or its current goal was not among the goals the plan was made

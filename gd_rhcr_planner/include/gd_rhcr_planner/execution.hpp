@@ -73,6 +73,12 @@ struct ExecutorConfig {
   // A late robot's undispatched moves and those of the robots waiting to enter its cell are
   // taken back (transitively) and planned again around it, instead of queueing behind it.
   bool revoke_behind_late = true;
+  // Catch-up: a robot that lost time to a delay (it was late, its commitments were taken back
+  // behind a late robot, or it got no move next to one) is owed a step per tick lost, up to this
+  // many; after the tick's step it makes one more move along the planner's intended path
+  // (Planner::intended_next) while it is owed steps and the cell is free. Robots whose moves take
+  // less than a tick so make up lost time at their own speed (0 = off; mapf model only).
+  int catch_up = 0;
   // The robots' action model: kMapf (moves to any neighbour) or kRotation (forward, quarter turns;
   // the planner and the distance table must plan in it too).
   gdrhcr::ActionModel action_model = gdrhcr::ActionModel::kMapf;
@@ -96,6 +102,7 @@ struct TickOutput {
   int dispatched = 0;            // moves commanded for the first time this tick
   int resyncs = 0;               // commitments rebuilt this tick (a robot changed health, slipped)
   int revoked = 0;               // robots whose undispatched moves were taken back (revoke_behind_late)
+  int caught_up = 0;             // extra moves committed to robots owed steps (ExecutorConfig::catch_up)
   std::string plan_error;        // the planned step was rejected by the validator: nobody got a new move
   std::vector<std::string> warnings;  // robots that changed health, unexpected reports
 };
@@ -168,6 +175,9 @@ class Executor {
     Cell claimed = gdrhcr::kNoCell;  // inconsistent: the cell it reported (blocked)
     bool unknown_move = false;  // reported moving with no move commanded: its neighbours are blocked
     bool reported_moving = false;  // its last report said it is between two cells
+    int owed = 0;               // catch_up: planned steps owed to it
+    uint64_t stepped = 0;       // the planning step (steps_) that last gave it a new pose
+    uint64_t revoked = 0;       // the tick that last took back its commitments
   };
 
   // The robots' reports against what the executor knows: placement, arrivals, slips, health.
@@ -213,6 +223,8 @@ class Executor {
                      TickOutput& out) const;
   std::vector<Cell> call_planner(StepInput& in, DeadlinePlanner& planner, TickOutput& out);
   void commit_step(StepInput& in, std::vector<Cell>& next, TickOutput& out);
+  void catch_up(const std::vector<std::vector<Cell>>& goals, const std::vector<uint8_t>& hold,
+                const gdrhcr::Planner& planner, TickOutput& out);
 
   const gdrhcr::Grid& grid_;
   const gdrhcr::DistTable& dist_;

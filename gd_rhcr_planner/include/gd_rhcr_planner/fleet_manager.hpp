@@ -45,6 +45,7 @@ struct FleetConfig {
   double plan_deadline = 0;       // s; 0 = 0.7 / tick_rate
   double offline_timeout = 2.0;   // s
   int commit_horizon = 2;         // ADG: committed, unfinished moves per robot
+  int catch_up = 100;             // ADG: steps owed to a robot that lost time to delays (0 = off)
   double dispatch_rate = 20.0;    // Hz: arrivals checked between ticks (0 = at ticks only)
   int dist_budget_mb = 256;
   std::string dispatcher = "batch";
@@ -230,7 +231,7 @@ class FleetManager {
   std::unique_ptr<gdrhcr::Planner> pending_planner_;
   uint64_t tick_ = 0, overruns_ = 0, skipped_ = 0, invalid_plans_ = 0, bad_reports_ = 0;
   uint64_t fallback_ticks_ = 0, late_ticks_ = 0, planner_errors_ = 0, store_errors_ = 0;
-  uint64_t early_dispatches_ = 0, reconfigures_ = 0, stats_errors_ = 0;
+  uint64_t early_dispatches_ = 0, catch_up_moves_ = 0, reconfigures_ = 0, stats_errors_ = 0;
   double first_report_ = 0;      // when the first robot reported (missing ones are waited for)
   std::deque<double> tick_walls_;  // wall times of recent ticks, for the measured rate
   double plan_time_sum_ = 0, plan_time_max_ = 0, step_time_max_ = 0, last_plan_time_ = 0;

@@ -92,6 +92,8 @@ class GdRhcrPlanner : public Planner {
   std::vector<PlannerGroup> groups() const override;
   // Agent i's planned cells from the current step on (its cached plan's remainder).
   std::vector<Cell> planned_path(int agent) const override;
+  // The cell after `at` on the agent's guidance path (which holds the primary solver's plans too).
+  Cell intended_next(int agent, Cell at) const override;
   int k_threshold() const { return k_threshold_; }
 
  private:

@@ -97,6 +97,13 @@ class Planner {
   virtual std::vector<PlannerGroup> groups() const { return {}; }
   // Agent i's planned cells from the current step on; empty when the planner keeps no plan.
   virtual std::vector<Cell> planned_path(int /*agent*/) const { return {}; }
+  // After a step that took agent i to `at`: the cell the planner means it to enter at the step
+  // after (planned_path one step further on), or kNoCell when it has none or `at` is off its path.
+  // For executors that let a robot which lost time make an extra move; between steps only.
+  virtual Cell intended_next(int agent, Cell at) const {
+    const std::vector<Cell> path = planned_path(agent);
+    return path.size() >= 3 && path[1] == at && path[2] != at ? path[2] : kNoCell;
+  }
 };
 
 // Planner names known to `make_planner`, in registration order.
