@@ -724,35 +724,14 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
   return out;
 }
 
-// Catch-up (ExecutorConfig::catch_up), after the tick's step. A robot is owed a step for each
-// tick it is late, its commitments are taken back behind a late robot, or it gets no move while
-// it stands next to a late robot. A robot owed steps that is not late itself, with fewer than
-// commit_horizon moves committed, makes one more move this tick, into the cell the planner means
-// it to enter next (Planner::intended_next), when no robot ends its commitments there and the cell
-// is not blocked. The ADG orders it like any other commitment; the planner's clock does not move.
+// Catch-up (ExecutorConfig::catch_up), after the tick's step: the robots owed steps (owe_steps)
+// make one more move each, into the cell the planner means them to enter next
+// (Planner::intended_next), when no robot ends its commitments there and the cell is not blocked.
+// The ADG orders such a move like any other commitment; the planner's clock does not move.
 void Executor::catch_up(const std::vector<std::vector<Cell>>& goals, const std::vector<uint8_t>& hold,
                         const gdrhcr::Planner& planner, TickOutput& out) {
-  const int n = num_robots();
-  std::vector<uint8_t> late_at(grid_.num_cells(), 0);
-  for (const Track& t : tracks_)
-    if (t.active && t.dispatched && t.dispatched_at < ticks_) late_at[t.cell] = 1;
-  std::vector<uint8_t> owing(n, 0);
-  bool any = false;
-  for (int r = 0; r < n; ++r) {
-    Track& t = tracks_[r];
-    if (!t.active || t.health != RobotHealth::kOk || on_hold(hold, r)) {
-      t.owed = 0;
-      continue;
-    }
-    const bool late = t.dispatched && t.dispatched_at < ticks_;
-    bool beside_late = false;
-    if (t.stepped != steps_)
-      for (Cell c : grid_.neighbours(t.cell)) beside_late = beside_late || late_at[c];
-    if (late || t.revoked == ticks_ || beside_late) t.owed = std::min(cfg_.catch_up, t.owed + 1);
-    owing[r] = !late && t.owed > 0 && static_cast<int>(t.path.size()) < cfg_.commit_horizon;
-    any = any || owing[r];
-  }
-  if (!any) return;
+  const std::vector<uint8_t> owing = owe_steps(hold);
+  if (std::find(owing.begin(), owing.end(), 1) == owing.end()) return;
   TickOutput extra;
   StepInput in;
   gather_agents(goals, hold, in, extra);
@@ -770,10 +749,36 @@ void Executor::catch_up(const std::vector<std::vector<Cell>>& goals, const std::
   }
   const uint64_t step = steps_;
   commit_step(in, next, extra);
-  for (int r = 0; r < n; ++r)
+  for (int r = 0; r < num_robots(); ++r)
     if (owing[r] && tracks_[r].stepped == steps_) --tracks_[r].owed, ++out.caught_up;
   steps_ = step;
   if (!extra.plan_error.empty()) out.plan_error = extra.plan_error;
+}
+
+// A robot is owed one more step for each tick it is late, its commitments are taken back behind
+// a late robot, or it gets no move in the tick's step while standing next to a late robot (up to
+// catch_up). Returns, per robot, whether it makes up a step now: owed, not late itself, and with
+// fewer than commit_horizon moves committed. Robots that are not healthy or on hold owe nothing.
+std::vector<uint8_t> Executor::owe_steps(const std::vector<uint8_t>& hold) {
+  const int n = num_robots();
+  std::vector<uint8_t> late_at(grid_.num_cells(), 0);
+  for (const Track& t : tracks_)
+    if (t.active && t.dispatched && t.dispatched_at < ticks_) late_at[t.cell] = 1;
+  std::vector<uint8_t> owing(n, 0);
+  for (int r = 0; r < n; ++r) {
+    Track& t = tracks_[r];
+    if (!t.active || t.health != RobotHealth::kOk || on_hold(hold, r)) {
+      t.owed = 0;
+      continue;
+    }
+    const bool late = t.dispatched && t.dispatched_at < ticks_;
+    bool beside_late = false;
+    if (t.stepped != steps_)
+      for (Cell c : grid_.neighbours(t.cell)) beside_late = beside_late || late_at[c];
+    if (late || t.revoked == ticks_ || beside_late) t.owed = std::min(cfg_.catch_up, t.owed + 1);
+    owing[r] = !late && t.owed > 0 && static_cast<int>(t.path.size()) < cfg_.commit_horizon;
+  }
+  return owing;
 }
 
 std::string Executor::debug_queue(Cell c) const {

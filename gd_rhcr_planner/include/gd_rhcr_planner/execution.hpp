@@ -225,6 +225,7 @@ class Executor {
   void commit_step(StepInput& in, std::vector<Cell>& next, TickOutput& out);
   void catch_up(const std::vector<std::vector<Cell>>& goals, const std::vector<uint8_t>& hold,
                 const gdrhcr::Planner& planner, TickOutput& out);
+  std::vector<uint8_t> owe_steps(const std::vector<uint8_t>& hold);
 
   const gdrhcr::Grid& grid_;
   const gdrhcr::DistTable& dist_;
