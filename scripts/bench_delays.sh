@@ -10,7 +10,8 @@
 # Environment: ROBOTS (300), DURATION (s per run, 180), P_DELAY (0.01), MAX_DELAY (20 ticks),
 # SPEED_SPREAD (0: every robot takes move_fraction of a tick per move), PLANNER (gd-rhcr),
 # EXECUTIONS (adg, the only execution since issue 22; kept so older command lines still run),
-# SEED (1), OUT (results/delays.json). Installs and builds what it needs (scripts/ros_env.sh;
+# SEED (1), OUT (results/delays.json), CONFIG (the node's parameter file; default config/fleet.yaml:
+# a copy with other values, e.g. catch_up: 0, compares a setting). Installs and builds what it needs (scripts/ros_env.sh;
 # GDRHCR_SKIP_BUILD=1 uses the workspace as it is). Holds /tmp/gdrhcr_ros.lock while it runs (one ROS run at a time).
 set -eo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
@@ -30,6 +31,9 @@ done
 EXECUTIONS=adg
 SEED=${SEED:-1}
 OUT=${OUT:-$top/results/delays.json}
+CONFIG=${CONFIG:-$top/config/fleet.yaml}
+[ -f "$CONFIG" ] || { echo "bench_delays: CONFIG='$CONFIG' is not a file" >&2; exit 2; }
+CONFIG=$(cd "$(dirname "$CONFIG")" && pwd)/$(basename "$CONFIG")
 # shellcheck source=ros_env.sh
 source "$top/scripts/ros_env.sh"
 export ROS_MASTER_URI=http://127.0.0.1:11712
@@ -43,7 +47,7 @@ for ex in $EXECUTIONS; do
     flock /tmp/gdrhcr_ros.lock roslaunch -p 11712 gd_rhcr_planner soak.launch faults:=false \
       num_robots:="$ROBOTS" planner:="$PLANNER" seed:="$SEED" duration:="$DURATION" robot_steps:=1000000000 \
       p_delay:="$p" max_delay_ticks:="$MAX_DELAY" speed_spread:="$SPEED_SPREAD" interlock:=false \
-      output:="$out" >"$ROS_HOME/bench_delays_${ex}_p${p}.log" 2>&1 || true
+      config:="$CONFIG" output:="$out" >"$ROS_HOME/bench_delays_${ex}_p${p}.log" 2>&1 || true
     runs+=("$ex" "$p" "$out")
   done
 done
