@@ -12,7 +12,7 @@
 // --between 1 (default): moves are dispatched the moment the robots ahead have left (the node's
 // dispatch timer, Executor::advance after every substep); 0: at ticks only. --revoke 1 (default):
 // moves queued behind late robots are taken back and planned again (ExecutorConfig); 0: kept.
-// --catch-up N (default 100, the node's): steps a robot that lost time to a delay may make up,
+// --catch-up N (default 100, the node's): steps a robot that lost time (late at a tick) may make up,
 // one extra move per tick along its planned path (ExecutorConfig::catch_up); 0: off.
 // --step-ticks M: a planning step stands for M ticks of the delay process (LoRR 2026's moves of 3
 // ticks: --step-ticks 3 --speed 10); delays start with p_delay per tick and last 1..D ticks.
@@ -236,7 +236,7 @@ void print_usage() {
       "  --commit-horizon H    moves a robot may have committed and not finished, >= 1 (%d)\n"
       "  --between 0|1         dispatch on arrival between ticks (%d)\n"
       "  --revoke 0|1          take back moves queued behind late robots (%d)\n"
-      "  --catch-up N          steps a robot that lost time to a delay may make up, 0..1000, 0 = off (%d)\n"
+      "  --catch-up N          steps a robot that lost time (late at a tick) may make up, 0..1000, 0 = off (%d)\n"
       "  --late N              robots 0..N-1 are off the floor (never reported) until --join-tick, 0..robots (%d)\n"
       "  --join-tick T         the tick at which they report (%d)\n"
       "  --step-ticks M        ticks of the delay process per planning step, 1..%d: a step stands for M ticks\n"

@@ -73,7 +73,7 @@ struct ExecutorConfig {
   // A late robot's undispatched moves and those of the robots waiting to enter its cell are
   // taken back (transitively) and planned again around it, instead of queueing behind it.
   bool revoke_behind_late = true;
-  // Catch-up: a robot that lost time to a delay (it was late, its commitments were taken back
+  // Catch-up: a robot that lost time (it was late at a tick, its commitments were taken back
   // behind a late robot, or it got no move next to one) is owed a step per tick lost, up to this
   // many; after the tick's step it makes one more move along the planner's intended path
   // (Planner::intended_next) while it is owed steps and the cell is free. Robots whose moves take

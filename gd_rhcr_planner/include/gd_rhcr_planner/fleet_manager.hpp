@@ -45,7 +45,7 @@ struct FleetConfig {
   double plan_deadline = 0;       // s; 0 = 0.7 / tick_rate
   double offline_timeout = 2.0;   // s
   int commit_horizon = 2;         // ADG: committed, unfinished moves per robot
-  int catch_up = 100;             // ADG: steps owed to a robot that lost time to delays (0 = off)
+  int catch_up = 100;             // ADG: steps owed to a robot that lost time, late at a tick (0 = off)
   double dispatch_rate = 20.0;    // Hz: arrivals checked between ticks (0 = at ticks only)
   int dist_budget_mb = 256;
   std::string dispatcher = "batch";
