@@ -56,6 +56,33 @@ TEST(GdRhcr, LoneGroupReusesItsPlanUntilExhausted) {
   EXPECT_EQ(p.stats()["cache_reuses"], 16);
 }
 
+// Planner::intended_next (the executor's catch-up): after a step, the cell after the agent's new
+// cell on its plan, one step further on; kNoCell for a cell off its plan. With the paper's
+// configuration (no guidance) from the cached plan, with the product's from the guidance path.
+TEST(GdRhcr, IntendsTheNextCellOfItsPlanAfterAStep) {
+  Grid g = Grid::from_rows({"..........", "..........", ".........."});
+  DistTable dist(g);
+  for (const char* preset : {"paper", "default"}) {
+    GdRhcrConfig cfg = preset_config(preset);
+    cfg.node_budget = 200;
+    cfg.timeout_s = 1e6;
+    GdRhcrPlanner p(g, 1, 1, cfg);
+    std::vector<Cell> pos = {g.cell(0, 1)};
+    std::vector<std::vector<Cell>> goals = {{g.cell(9, 1)}};
+    std::vector<Cell> next(1);
+    for (int t = 0; t < 4; ++t) {
+      WorldView w{g, dist, t, pos, goals};
+      p.plan_step(w, next);
+      const Cell then = p.intended_next(0, next[0]);
+      ASSERT_NE(then, kNoCell) << preset << " t=" << t;
+      EXPECT_TRUE(g.step_allowed(next[0], then)) << preset;
+      EXPECT_EQ(dist.get(goals[0][0], then), dist.get(goals[0][0], next[0]) - 1) << preset << ": on to the goal";
+      EXPECT_EQ(p.intended_next(0, g.cell(5, 0)), kNoCell) << preset << ": a cell off the plan";
+      pos = next;
+    }
+  }
+}
+
 TEST(GdRhcr, JoiningAgentTriggersReplan) {
   // Two agents approach each other head-on; when they come within V they form one group with
   // plans from different solves, so that group replans at once.
