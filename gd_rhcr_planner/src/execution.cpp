@@ -443,7 +443,7 @@ int Executor::revoke_behind_late() {
   int n = 0;
   for (int r = 0; r < num_robots(); ++r) {
     const Track& t = tracks_[r];
-    if (!t.active || t.health != RobotHealth::kOk || !t.dispatched || t.dispatched_at >= ticks_) continue;
+    if (!t.active || t.health != RobotHealth::kOk || !late(t)) continue;
     n += revoke(r);
     auto it = visits_.find(t.cell);
     if (it == visits_.end()) continue;
@@ -600,7 +600,7 @@ void Executor::gather_agents(const std::vector<std::vector<Cell>>& goals, const 
     // move is dispatched and made. Behind such a robot others would only queue: the planner
     // routes them around (WorldView::blocked), and the hold cascade still holds any move into
     // them.
-    if ((t.dispatched && t.dispatched_at < ticks_) || (!t.dispatched && !t.path.empty())) in.late_cells.push_back(t.cell);
+    if (late(t) || (!t.dispatched && !t.path.empty())) in.late_cells.push_back(t.cell);
     out.agent_goals[a] = on_hold(hold, r) ? std::vector<Cell>{end} : planner_goals(r, goals[r], end);
   }
   for (const Track& t : tracks_)
@@ -763,7 +763,7 @@ std::vector<uint8_t> Executor::owe_steps(const std::vector<uint8_t>& hold) {
   const int n = num_robots();
   std::vector<uint8_t> late_at(grid_.num_cells(), 0);
   for (const Track& t : tracks_)
-    if (t.active && t.dispatched && t.dispatched_at < ticks_) late_at[t.cell] = 1;
+    if (t.active && late(t)) late_at[t.cell] = 1;
   std::vector<uint8_t> owing(n, 0);
   for (int r = 0; r < n; ++r) {
     Track& t = tracks_[r];
@@ -771,12 +771,11 @@ std::vector<uint8_t> Executor::owe_steps(const std::vector<uint8_t>& hold) {
       t.owed = 0;
       continue;
     }
-    const bool late = t.dispatched && t.dispatched_at < ticks_;
     bool beside_late = false;
     if (t.stepped != steps_)
       for (Cell c : grid_.neighbours(t.cell)) beside_late = beside_late || late_at[c];
-    if (late || t.revoked == ticks_ || beside_late) t.owed = std::min(cfg_.catch_up, t.owed + 1);
-    owing[r] = !late && t.owed > 0 && static_cast<int>(t.path.size()) < cfg_.commit_horizon;
+    if (late(t) || t.revoked == ticks_ || beside_late) t.owed = std::min(cfg_.catch_up, t.owed + 1);
+    owing[r] = !late(t) && t.owed > 0 && static_cast<int>(t.path.size()) < cfg_.commit_horizon;
   }
   return owing;
 }

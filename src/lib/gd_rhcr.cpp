@@ -315,8 +315,7 @@ std::vector<Cell> GdRhcrPlanner::planned_path(int agent) const {
 
 Cell GdRhcrPlanner::intended_next(int agent, Cell at) const {
   if (!guidance_) return Planner::intended_next(agent, at);
-  const std::vector<Cell> path = guidance_->path_from(agent, now_);
-  return path.size() >= 3 && path[1] == at && path[2] != at ? path[2] : kNoCell;
+  return cell_after_step(guidance_->path_from(agent, now_), at);
 }
 
 // Algorithm 1's lazy test: replan when the agents' plans come from different solves (someone

@@ -188,6 +188,8 @@ class Executor {
   bool take_heading(int r, const RobotRecord& rec, TickOutput& out);
   RobotHealth report_health(int r, const RobotRecord& rec, TickOutput& out) const;
   bool rotation() const { return cfg_.action_model == gdrhcr::ActionModel::kRotation; }
+  // Late: commanded a move in an earlier tick and not arrived yet.
+  bool late(const Track& t) const { return t.dispatched && t.dispatched_at < ticks_; }
   bool take_unexpected_cell(int r, Cell x, const std::vector<RobotRecord>& robots, TickOutput& out);
   bool take_entering(int r, Cell x, const std::vector<RobotRecord>& robots, TickOutput& out);
   int yield_cell(int r, Cell x, const std::vector<RobotRecord>& robots, const char* how, TickOutput& out,

@@ -100,8 +100,12 @@ class Planner {
   // After a step that took agent i to `at`: the cell the planner means it to enter at the step
   // after (planned_path one step further on), or kNoCell when it has none or `at` is off its path.
   // For executors that let a robot which lost time make an extra move; between steps only.
-  virtual Cell intended_next(int agent, Cell at) const {
-    const std::vector<Cell> path = planned_path(agent);
+  virtual Cell intended_next(int agent, Cell at) const { return cell_after_step(planned_path(agent), at); }
+
+ protected:
+  // path[2] when path[1] is `at` and path[2] another cell (a path from the step just planned on),
+  // else kNoCell.
+  static Cell cell_after_step(const std::vector<Cell>& path, Cell at) {
     return path.size() >= 3 && path[1] == at && path[2] != at ? path[2] : kNoCell;
   }
 };
