@@ -756,14 +756,11 @@ void Executor::catch_up(const std::vector<std::vector<Cell>>& goals, const std::
 }
 
 // A robot is owed one more step for each tick it is late, its commitments are taken back behind
-// a late robot, or it gets no move in the tick's step while standing next to a late robot (up to
-// catch_up). Returns, per robot, whether it makes up a step now: owed, not late itself, and with
+// a late robot, or it gets no move in the tick's step, whatever held it (a late robot ahead, a
+// turn, a wait in the plan), up to catch_up. Returns, per robot, whether it makes up a step now: owed, not late itself, and with
 // fewer than commit_horizon moves committed. Robots that are not healthy or on hold owe nothing.
 std::vector<uint8_t> Executor::owe_steps(const std::vector<uint8_t>& hold) {
   const int n = num_robots();
-  std::vector<uint8_t> late_at(grid_.num_cells(), 0);
-  for (const Track& t : tracks_)
-    if (t.active && late(t)) late_at[t.cell] = 1;
   std::vector<uint8_t> owing(n, 0);
   for (int r = 0; r < n; ++r) {
     Track& t = tracks_[r];
@@ -771,10 +768,7 @@ std::vector<uint8_t> Executor::owe_steps(const std::vector<uint8_t>& hold) {
       t.owed = 0;
       continue;
     }
-    bool beside_late = false;
-    if (t.stepped != steps_)
-      for (Cell c : grid_.neighbours(t.cell)) beside_late = beside_late || late_at[c];
-    if (late(t) || t.revoked == ticks_ || beside_late) t.owed = std::min(cfg_.catch_up, t.owed + 1);
+    if (late(t) || t.revoked == ticks_ || t.stepped != steps_) t.owed = std::min(cfg_.catch_up, t.owed + 1);
     owing[r] = !late(t) && t.owed > 0 && static_cast<int>(t.path.size()) < cfg_.commit_horizon;
   }
   return owing;
