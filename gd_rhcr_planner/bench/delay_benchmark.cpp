@@ -16,6 +16,9 @@
 // one extra move per tick along its planned path (ExecutorConfig::catch_up); 0: off.
 // --step-ticks M: a planning step stands for M ticks of the delay process (LoRR 2026's moves of 3
 // ticks: --step-ticks 3 --speed 10); delays start with p_delay per tick and last 1..D ticks.
+// --turning 1: the robots face a heading and turn (a quarter turn as long as a move) towards a
+// neighbour they are sent to before moving, as fleet_sim's robots do while the node plans in the
+// mapf model; 0 (default): they move to any neighbour at once.
 // --late N: robots 0..N-1 are off the floor (they never reported) until --join-tick; then they
 // report, at their cell if it is free, else at a free one (a robot joining the fleet late).
 // Each robot's goals come from its own random stream, so both runs of a seed give every robot
@@ -44,6 +47,7 @@ struct Options {
   int robots = 300, ticks = 300, max_delay = 20, speed = 6, seeds = 1, commit_horizon = 2, between = 1, revoke = 1, catch_up = 100;  // the node's defaults
   int late = 0, join_tick = 50;  // robots 0..late-1 are off the floor until join_tick
   int step_ticks = 1;            // ticks of the delay process per planning step (DelayedFleet::ticks_per_step)
+  int turning = 0;               // robots turn before a move (DelayedFleet::give_headings)
   double p_delay = 0.01;
   std::vector<std::pair<std::string, std::string>> params;  // --param key=value, for the planner
 };
@@ -145,6 +149,7 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
   DelayedFleet fleet(g, o.robots, seed, o.speed, o.speed);
   for (int i = 0; i < o.late; ++i) fleet.robots()[i].missing = true;
   fleet.ticks_per_step = o.step_ticks;
+  if (o.turning) fleet.give_headings(false);
   Result r;
   const bool why = std::getenv("DELAY_BENCH_WHY") != nullptr;
   DelayedFleet::Between between;
@@ -212,6 +217,7 @@ Options read_options(const BenchOptions& cl) {
   o.late = static_cast<int>(cl.integer("late", o.late, 0, o.robots));
   o.join_tick = static_cast<int>(cl.integer("join-tick", o.join_tick, 0, 10000000));
   o.step_ticks = static_cast<int>(cl.integer("step-ticks", o.step_ticks, 1, SimRobot::kSub));
+  o.turning = static_cast<int>(cl.integer("turning", o.turning, 0, 1));
   for (const std::string& kv : cl.all("param")) {
     const size_t eq = kv.find('=');
     if (eq == std::string::npos || eq == 0) throw BenchOptionError("--param must be key=value, not '" + kv + "'");
@@ -241,9 +247,10 @@ void print_usage() {
       "  --join-tick T         the tick at which they report (%d)\n"
       "  --step-ticks M        ticks of the delay process per planning step, 1..%d: a step stands for M ticks\n"
       "                        (moves of M ticks with --speed %d); p-delay and max-delay are per tick (%d)\n"
+      "  --turning 0|1         robots turn towards a neighbour before moving, a quarter turn as long as a move (%d)\n"
       "  --param key=value     a planner parameter (repeatable)\n",
       d.map.c_str(), d.planner.c_str(), d.robots, d.ticks, d.p_delay, d.max_delay, SimRobot::kSub, d.speed, d.seeds,
-      d.commit_horizon, d.between, d.revoke, d.catch_up, d.late, d.join_tick, SimRobot::kSub, SimRobot::kSub, d.step_ticks);
+      d.commit_horizon, d.between, d.revoke, d.catch_up, d.late, d.join_tick, SimRobot::kSub, SimRobot::kSub, d.step_ticks, d.turning);
 }
 
 // Both runs of every seed and the figures; returns the exit code.
@@ -258,6 +265,7 @@ int run_all(const Options& o) {
               o.catch_up, o.ticks,
               o.speed / double(SimRobot::kSub), o.p_delay, o.max_delay);
   if (o.late > 0) std::printf("robots 0..%d join at tick %d\n", o.late - 1, o.join_tick);
+  if (o.turning) std::printf("robots turn towards a neighbour before moving (a quarter turn as long as a move)\n");
   if (o.step_ticks > 1) std::printf("a planning step stands for %d ticks of the delay process\n", o.step_ticks);
   std::printf("%5s %14s %14s %7s %16s %16s %12s %14s\n", "seed", "goals/tick no", "goals/tick p", "ratio",
               "delayed robots", "waiting no / p", "held moves", "moves no / p");
@@ -284,7 +292,7 @@ int run_all(const Options& o) {
 int main(int argc, char** argv) {
   try {
     const BenchOptions cl(argc, argv, {"map", "planner", "robots", "ticks", "p-delay", "max-delay", "speed", "seeds",
-                                       "commit-horizon", "between", "revoke", "catch-up", "late", "join-tick", "step-ticks", "param"});
+                                       "commit-horizon", "between", "revoke", "catch-up", "late", "join-tick", "step-ticks", "turning", "param"});
     if (cl.help()) {
       print_usage();
       return 0;

@@ -65,19 +65,21 @@ TEST(DelayBenchmarkOptions, NonsenseIsRejectedNamingTheOption) {
                    {"--robots 6 --late 7", "--late"},
                    {"--step-ticks 0", "--step-ticks"},
                    {"--step-ticks 11", "--step-ticks"},
+                   {"--turning 2", "--turning"},
                    {"--robot 5", "--robot"},  // unknown
                    {"--robots", "--robots"}});  // no value
 }
 
 TEST(DelayBenchmarkOptions, GoodOptionsRunAndHelpListsThem) {
   const Outcome ok = run(std::string(DELAY_BENCHMARK) + kSmallMap +
-                         " --robots 6 --ticks 4 --planner pibt --p-delay 0.5 --late 2 --join-tick 2 --step-ticks 3");
+                         " --robots 6 --ticks 4 --planner pibt --p-delay 0.5 --late 2 --join-tick 2 --step-ticks 3 --turning 1");
   EXPECT_EQ(ok.code, 0) << ok.output;
   EXPECT_NE(ok.output.find("mean ratio"), std::string::npos) << ok.output;
+  EXPECT_NE(ok.output.find("robots turn"), std::string::npos) << ok.output;
   const Outcome help = run(std::string(DELAY_BENCHMARK) + " --help");
   EXPECT_EQ(help.code, 0) << help.output;
   for (const char* option : {"--robots", "--ticks", "--p-delay", "--max-delay", "--speed", "--seeds", "--commit-horizon",
-                             "--between", "--revoke", "--late", "--join-tick", "--step-ticks", "--param"})
+                             "--between", "--revoke", "--late", "--join-tick", "--step-ticks", "--turning", "--param"})
     EXPECT_NE(help.output.find(option), std::string::npos) << option;
 }
 
