@@ -12,10 +12,14 @@
 // --between 1 (default): moves are dispatched the moment the robots ahead have left (the node's
 // dispatch timer, Executor::advance after every substep); 0: at ticks only. --revoke 1 (default):
 // moves queued behind late robots are taken back and planned again (ExecutorConfig); 0: kept.
-// --catch-up N (default 100, the node's): steps a robot that lost time (late at a tick) may make up,
-// one extra move per tick along its planned path (ExecutorConfig::catch_up); 0: off.
+// --catch-up N (default 100, the node's): steps a robot that lost time (a tick it was late or got
+// no move) may make up, one extra move per tick along its planned path (ExecutorConfig::catch_up);
+// 0: off.
 // --step-ticks M: a planning step stands for M ticks of the delay process (LoRR 2026's moves of 3
 // ticks: --step-ticks 3 --speed 10); delays start with p_delay per tick and last 1..D ticks.
+// --action-model rotation: the planner and the executor plan forward moves and quarter turns
+// (LoRR's model; robots turn only when told, a quarter turn as long as a move); mapf (default):
+// moves to any neighbour.
 // --turning 1: the robots face a heading and turn (a quarter turn as long as a move) towards a
 // neighbour they are sent to before moving, as fleet_sim's robots do while the node plans in the
 // mapf model; 0 (default): they move to any neighbour at once.
@@ -48,6 +52,7 @@ struct Options {
   int late = 0, join_tick = 50;  // robots 0..late-1 are off the floor until join_tick
   int step_ticks = 1;            // ticks of the delay process per planning step (DelayedFleet::ticks_per_step)
   int turning = 0;               // robots turn before a move (DelayedFleet::give_headings)
+  std::string action_model = "mapf";
   double p_delay = 0.01;
   std::vector<std::pair<std::string, std::string>> params;  // --param key=value, for the planner
 };
@@ -135,13 +140,14 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
   // Node-budget mode: the same plans on any machine (no timeouts).
   if (o.planner == "gd-rhcr") params.set("timeout", "1e6"), params.set("node-budget", "2000");
   for (const auto& [k, v] : o.params) params.set(k, v);
-  const auto values = gdrhcr::PlannerParams::resolve(o.planner, params, gdrhcr::MapFacts(g, o.robots));
+  const gdrhcr::ActionModel model = gdrhcr::parse_action_model(o.action_model);
+  const auto values = gdrhcr::PlannerParams::resolve(o.planner, params, gdrhcr::MapFacts(g, o.robots, model));
   params.check_all_used(o.planner);  // a misspelt --param is an error, not ignored
-  const gdrhcr::DistTable dist(g, gdrhcr::ActionModel::kMapf, gdrhcr::DistTable::kDefaultBudgetBytes,
-                               gdrhcr::step_costs(values, gdrhcr::ActionModel::kMapf));
-  auto primary = gdrhcr::make_planner(values, g, o.robots, seed);
-  DeadlinePlanner planner(std::move(primary), gdrhcr::make_planner("pibt", none, g, o.robots, seed));
+  const gdrhcr::DistTable dist(g, model, gdrhcr::DistTable::kDefaultBudgetBytes, gdrhcr::step_costs(values, model));
+  auto primary = gdrhcr::make_planner(values, g, o.robots, seed, model);
+  DeadlinePlanner planner(std::move(primary), gdrhcr::make_planner("pibt", none, g, o.robots, seed, model));
   ExecutorConfig cfg;
+  cfg.action_model = model;
   cfg.commit_horizon = o.commit_horizon;
   cfg.revoke_behind_late = o.revoke != 0;
   cfg.catch_up = o.catch_up;
@@ -149,7 +155,8 @@ Result run(const gdrhcr::Grid& g, const Options& o, double p_delay, uint64_t see
   DelayedFleet fleet(g, o.robots, seed, o.speed, o.speed);
   for (int i = 0; i < o.late; ++i) fleet.robots()[i].missing = true;
   fleet.ticks_per_step = o.step_ticks;
-  if (o.turning) fleet.give_headings(false);
+  if (model == gdrhcr::ActionModel::kRotation) fleet.give_headings(true);
+  else if (o.turning) fleet.give_headings(false);
   Result r;
   const bool why = std::getenv("DELAY_BENCH_WHY") != nullptr;
   DelayedFleet::Between between;
@@ -218,6 +225,12 @@ Options read_options(const BenchOptions& cl) {
   o.join_tick = static_cast<int>(cl.integer("join-tick", o.join_tick, 0, 10000000));
   o.step_ticks = static_cast<int>(cl.integer("step-ticks", o.step_ticks, 1, SimRobot::kSub));
   o.turning = static_cast<int>(cl.integer("turning", o.turning, 0, 1));
+  o.action_model = cl.text("action-model", o.action_model);
+  try {
+    gdrhcr::parse_action_model(o.action_model);
+  } catch (const std::exception& e) {
+    throw BenchOptionError("--action-model: " + std::string(e.what()));
+  }
   for (const std::string& kv : cl.all("param")) {
     const size_t eq = kv.find('=');
     if (eq == std::string::npos || eq == 0) throw BenchOptionError("--param must be key=value, not '" + kv + "'");
@@ -242,15 +255,16 @@ void print_usage() {
       "  --commit-horizon H    moves a robot may have committed and not finished, >= 1 (%d)\n"
       "  --between 0|1         dispatch on arrival between ticks (%d)\n"
       "  --revoke 0|1          take back moves queued behind late robots (%d)\n"
-      "  --catch-up N          steps a robot that lost time (late at a tick) may make up, 0..1000, 0 = off (%d)\n"
+      "  --catch-up N          steps a robot that lost time (a tick late or without a move) may make up, 0..1000, 0 = off (%d)\n"
       "  --late N              robots 0..N-1 are off the floor (never reported) until --join-tick, 0..robots (%d)\n"
       "  --join-tick T         the tick at which they report (%d)\n"
       "  --step-ticks M        ticks of the delay process per planning step, 1..%d: a step stands for M ticks\n"
       "                        (moves of M ticks with --speed %d); p-delay and max-delay are per tick (%d)\n"
+      "  --action-model M      mapf or rotation: the planner's and the executor's moves (%s)\n"
       "  --turning 0|1         robots turn towards a neighbour before moving, a quarter turn as long as a move (%d)\n"
       "  --param key=value     a planner parameter (repeatable)\n",
       d.map.c_str(), d.planner.c_str(), d.robots, d.ticks, d.p_delay, d.max_delay, SimRobot::kSub, d.speed, d.seeds,
-      d.commit_horizon, d.between, d.revoke, d.catch_up, d.late, d.join_tick, SimRobot::kSub, SimRobot::kSub, d.step_ticks, d.turning);
+      d.commit_horizon, d.between, d.revoke, d.catch_up, d.late, d.join_tick, SimRobot::kSub, SimRobot::kSub, d.step_ticks, d.action_model.c_str(), d.turning);
 }
 
 // Both runs of every seed and the figures; returns the exit code.
@@ -265,6 +279,7 @@ int run_all(const Options& o) {
               o.catch_up, o.ticks,
               o.speed / double(SimRobot::kSub), o.p_delay, o.max_delay);
   if (o.late > 0) std::printf("robots 0..%d join at tick %d\n", o.late - 1, o.join_tick);
+  if (o.action_model != "mapf") std::printf("action model %s: robots turn only when told\n", o.action_model.c_str());
   if (o.turning) std::printf("robots turn towards a neighbour before moving (a quarter turn as long as a move)\n");
   if (o.step_ticks > 1) std::printf("a planning step stands for %d ticks of the delay process\n", o.step_ticks);
   std::printf("%5s %14s %14s %7s %16s %16s %12s %14s\n", "seed", "goals/tick no", "goals/tick p", "ratio",
@@ -292,7 +307,7 @@ int run_all(const Options& o) {
 int main(int argc, char** argv) {
   try {
     const BenchOptions cl(argc, argv, {"map", "planner", "robots", "ticks", "p-delay", "max-delay", "speed", "seeds",
-                                       "commit-horizon", "between", "revoke", "catch-up", "late", "join-tick", "step-ticks", "turning", "param"});
+                                       "commit-horizon", "between", "revoke", "catch-up", "late", "join-tick", "step-ticks", "action-model", "turning", "param"});
     if (cl.help()) {
       print_usage();
       return 0;

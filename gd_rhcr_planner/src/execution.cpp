@@ -698,7 +698,7 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
   dispatch_ready(out, ticks_, held);
   if (cfg_.revoke_behind_late) out.revoked = revoke_behind_late();
   plan_and_commit(goals, held, planner, out);
-  if (cfg_.catch_up > 0 && !rotation() && out.plan_error.empty() && out.planner_called && !out.outcome.fallback &&
+  if (cfg_.catch_up > 0 && out.plan_error.empty() && out.planner_called && !out.outcome.fallback &&
       planner.primary_idle())
     catch_up(goals, held, planner.primary(), out);
   dispatch_ready(out, ticks_, held);
@@ -727,7 +727,9 @@ TickOutput Executor::tick(const std::vector<RobotRecord>& robots, const std::vec
 // Catch-up (ExecutorConfig::catch_up), after the tick's step: the robots owed steps (owe_steps)
 // make one more move each, into the cell the planner means them to enter next
 // (Planner::intended_next), when no robot ends its commitments there and the cell is not blocked.
-// The ADG orders such a move like any other commitment; the planner's clock does not move.
+// In the rotation model only a forward move is made up (the cell ahead of the robot's planned
+// heading): turns are not. The ADG orders such a move like any other commitment; the planner's
+// clock does not move.
 void Executor::catch_up(const std::vector<std::vector<Cell>>& goals, const std::vector<uint8_t>& hold,
                         const gdrhcr::Planner& planner, TickOutput& out) {
   const std::vector<uint8_t> owing = owe_steps(hold);
@@ -739,11 +741,13 @@ void Executor::catch_up(const std::vector<std::vector<Cell>>& goals, const std::
   for (const auto* cells : {&in.positions, &in.obstacles, &in.blocked, &in.late_cells})
     for (Cell c : *cells) taken[c] = 1;
   std::vector<Cell> next = in.positions;
+  in.next_headings = in.headings;
   for (int a = 0; a < static_cast<int>(next.size()); ++a) {
     in.immovable[a] = !owing[extra.robot_of_agent[a]];
     if (in.immovable[a]) continue;
     const Cell c = planner.intended_next(a, in.positions[a]);
     if (c == kNoCell || taken[c] || !grid_.step_allowed(in.positions[a], c)) continue;
+    if (rotation() && gdrhcr::heading_of_move(grid_, in.positions[a], c) != in.headings[a]) continue;
     taken[c] = 1;
     next[a] = c;
   }

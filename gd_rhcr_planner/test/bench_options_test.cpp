@@ -66,6 +66,7 @@ TEST(DelayBenchmarkOptions, NonsenseIsRejectedNamingTheOption) {
                    {"--step-ticks 0", "--step-ticks"},
                    {"--step-ticks 11", "--step-ticks"},
                    {"--turning 2", "--turning"},
+                   {"--action-model diagonal", "--action-model"},
                    {"--robot 5", "--robot"},  // unknown
                    {"--robots", "--robots"}});  // no value
 }
@@ -79,7 +80,7 @@ TEST(DelayBenchmarkOptions, GoodOptionsRunAndHelpListsThem) {
   const Outcome help = run(std::string(DELAY_BENCHMARK) + " --help");
   EXPECT_EQ(help.code, 0) << help.output;
   for (const char* option : {"--robots", "--ticks", "--p-delay", "--max-delay", "--speed", "--seeds", "--commit-horizon",
-                             "--between", "--revoke", "--late", "--join-tick", "--step-ticks", "--turning", "--param"})
+                             "--between", "--revoke", "--late", "--join-tick", "--step-ticks", "--action-model", "--turning", "--param"})
     EXPECT_NE(help.output.find(option), std::string::npos) << option;
 }
 

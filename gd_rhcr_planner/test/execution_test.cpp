@@ -898,14 +898,14 @@ std::unique_ptr<DeadlinePlanner> make_fn_planner_rotation(const Grid& g, int n, 
 }
 
 struct TurnResult {
-  int goals_tail = 0, turns = 0, turns_before_moves = 0;
+  int goals_tail = 0, turns = 0, turns_before_moves = 0, caught_up = 0;
 };
 
 // run_fleet's loop with turning robots (DelayedFleet::give_headings: a quarter turn takes a move's
 // time): `model` is the planner's and the executor's. In the rotation model a robot must never be
 // sent forward into a cell it does not face (DelayedFleet reports it as a bad command).
 TurnResult run_turning(gdrhcr::ActionModel model, const std::string& planner_name, int n, uint64_t seed, int ticks,
-                       int tail, double p_delay, bool between) {
+                       int tail, double p_delay, bool between, int catch_up = 0) {
   const Grid& g = small_warehouse();
   gdrhcr::DistTable dist(g, model);
   gdrhcr::Params params, none;
@@ -913,6 +913,7 @@ TurnResult run_turning(gdrhcr::ActionModel model, const std::string& planner_nam
   ExecutorConfig cfg;
   cfg.commit_horizon = 2;
   cfg.action_model = model;
+  cfg.catch_up = catch_up;
   DeadlinePlanner planner(gdrhcr::make_planner(planner_name, params, g, n, seed, model),
                           gdrhcr::make_planner("pibt", none, g, n, seed, model));
   Executor ex(g, dist, n, cfg);
@@ -932,6 +933,7 @@ TurnResult run_turning(gdrhcr::ActionModel model, const std::string& planner_nam
     EXPECT_TRUE(out.stepped) << out.skip_reason;
     EXPECT_EQ(out.plan_error, "") << "seed " << seed << " tick " << t;
     EXPECT_EQ(ex.check_invariants(), "") << "seed " << seed << " tick " << t;
+    res.caught_up += out.caught_up;
     const std::string bad = sim.execute(out, t < ticks ? p_delay : 0.0, 20, between ? on_arrival : nullptr);
     if (!bad.empty() || ::testing::Test::HasFailure()) {
       ADD_FAILURE() << bad << " (" << planner_name << " " << gdrhcr::action_model_name(model) << " seed " << seed
@@ -1065,6 +1067,46 @@ TEST(ExecutorRotation, DelayedTurningRobotsNeverCollideNorDeadlock) {
       EXPECT_EQ(r.turns_before_moves, 0) << planner << " seed " << seed;
     }
   }
+}
+
+// The same with catch-up: robots owed steps make extra forward moves (never a turn, and never into
+// a cell they do not face, which the simulated robots would report as a bad command).
+TEST(ExecutorRotation, DelayedTurningRobotsNeverCollideNorDeadlock_CatchUp) {
+  for (uint64_t seed = 1; seed <= seeds(4); ++seed) {
+    const TurnResult r = run_turning(gdrhcr::ActionModel::kRotation, "gd-rhcr", 24, seed, 120, 60, 0.05, true, 100);
+    if (HasFailure()) return;
+    EXPECT_GT(r.goals_tail, 0) << "seed " << seed;
+    EXPECT_GT(r.caught_up, 0) << "seed " << seed;
+    EXPECT_EQ(r.turns_before_moves, 0) << "seed " << seed;
+  }
+}
+
+// Catch-up in the rotation model, step by step: robot 0 faces east and is planned to wait at
+// step 1; owed that step, it makes up the forward move east at once. Robot 1 faces north, and
+// the cell its planner means it to enter next is east: a turn would be needed, so no extra move.
+TEST(ExecutorRotation, CatchUpMakesUpForwardMovesOnly) {
+  const Grid g = Grid::from_rows({"......", "......"});
+  gdrhcr::DistTable dist(g, gdrhcr::ActionModel::kRotation);
+  FnPlanner* fn;
+  auto planner = make_fn_planner_rotation(g, 2, &fn);
+  ExecutorConfig cfg;
+  cfg.action_model = gdrhcr::ActionModel::kRotation;
+  cfg.commit_horizon = 2;
+  cfg.catch_up = 100;
+  Executor ex(g, dist, 2, cfg);
+  std::vector<RobotRecord> robots{facing(g, 0, 0, gdrhcr::kEast), facing(g, 0, 1, gdrhcr::kNorth)};
+  fn->fn = [&](const gdrhcr::WorldView&, std::vector<Cell>&) {};  // both planned to wait
+  fn->intends = [&](int, Cell c) { return c + 1; };                // east
+  auto out = ex.tick(robots, stay_goals(robots), *planner, false);
+  EXPECT_EQ(out.plan_error, "");
+  EXPECT_EQ(out.caught_up, 1);
+  EXPECT_EQ(out.command[0], g.cell(1, 0));
+  EXPECT_EQ(out.command_heading[0], gdrhcr::kEast);
+  EXPECT_EQ(command_action({ex.cell(0), ex.heading(0)}, out.command[0], out.command_heading[0]), gdrhcr::Action::kForward);
+  EXPECT_TRUE(ex.committed(1).empty()) << "robot 1 would have to turn: nothing made up";
+  EXPECT_EQ(out.command[1], g.cell(0, 1));
+  EXPECT_EQ(out.command_heading[1], gdrhcr::kNorth);
+  EXPECT_EQ(ex.check_invariants(), "");
 }
 
 // Mapf plans executed by turning robots: a move's command carries its heading, the robot turns

@@ -74,10 +74,11 @@ struct ExecutorConfig {
   // taken back (transitively) and planned again around it, instead of queueing behind it.
   bool revoke_behind_late = true;
   // Catch-up: a robot that lost time (it was late at a tick, its commitments were taken back
-  // behind a late robot, or it got no move next to one) is owed a step per tick lost, up to this
-  // many; after the tick's step it makes one more move along the planner's intended path
-  // (Planner::intended_next) while it is owed steps and the cell is free. Robots whose moves take
-  // less than a tick so make up lost time at their own speed (0 = off; mapf model only).
+  // behind a late robot, or it got no move in the tick's step) is owed a step per tick lost, up
+  // to this many; after the tick's step it makes one more move along the planner's intended path
+  // (Planner::intended_next) while it is owed steps and the cell is free (in the rotation model,
+  // forward moves only). Robots whose moves take less than a tick so make up lost time at their
+  // own speed (0 = off).
   int catch_up = 0;
   // The robots' action model: kMapf (moves to any neighbour) or kRotation (forward, quarter turns;
   // the planner and the distance table must plan in it too).
