@@ -761,8 +761,9 @@ void Executor::catch_up(const std::vector<std::vector<Cell>>& goals, const std::
 
 // A robot is owed one more step for each tick it is late, its commitments are taken back behind
 // a late robot, or it gets no move in the tick's step, whatever held it (a late robot ahead, a
-// turn, a wait in the plan), up to catch_up. Returns, per robot, whether it makes up a step now: owed, not late itself, and with
-// fewer than commit_horizon moves committed. Robots that are not healthy or on hold owe nothing.
+// turn, a wait in the plan), up to catch_up. Returns, per robot, whether it makes up a step now:
+// owed, not late itself, and with fewer than commit_horizon moves committed. Robots that are not
+// healthy or on hold owe nothing.
 std::vector<uint8_t> Executor::owe_steps(const std::vector<uint8_t>& hold) {
   const int n = num_robots();
   std::vector<uint8_t> owing(n, 0);
