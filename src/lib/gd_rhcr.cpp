@@ -617,6 +617,7 @@ nlohmann::json GdRhcrPlanner::params() const {
           {"lg_near_steps", cfg_.lg.near_steps},
           {"lg_contraflow", cfg_.lg.contraflow_cost},
           {"lg_lazy", cfg_.lg.lazy},
+          {"lg_straight", cfg_.lg.straight},
           {"lg_recheck", cfg_.lg.recheck},
           {"lg_keep", cfg_.lg.keep},
           {"lg_expansions", cfg_.lg.max_expansions},

@@ -36,6 +36,7 @@ nlohmann::json PibtPlanner::params() const {
     p["lg_near_steps"] = guidance_->config().near_steps;
     p["lg_contraflow"] = guidance_->config().contraflow_cost;
     p["lg_lazy"] = guidance_->config().lazy;
+    p["lg_straight"] = guidance_->config().straight;
     p["lg_phases"] = guidance_->config().phases;
     p["lg_forecast"] = forecast_ ? forecast_->config().steps : 0;
     if (forecast_) p["lg_forecast_window"] = forecast_->config().window;

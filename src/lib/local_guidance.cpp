@@ -356,7 +356,8 @@ void LocalGuidance::Marks::grow() {
     nb[m] = v, nh[m++] = rotate_cw(h);
     nb[m] = v, nh[m++] = rotate_ccw(h);
   } else {
-    for (Cell u : grid_.neighbours(v)) nb[m] = u, nh[m++] = kNoHeading;
+    // Mapf: the heading of the move, for lg-straight's tie break only (the search's states are cells).
+    for (Cell u : grid_.neighbours(v)) nb[m] = u, nh[m++] = cfg_.straight ? heading_of_move(grid_, v, u) : kNoHeading;
   }
   for (int a = m - 1; a > 0; --a) {
     const auto r = rng();  // r % (a + 1), with a constant divisor for each of the few a
@@ -427,7 +428,8 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
       if (mk.tag == closed) return;
       const int h = dist_of(u, hd);
       if (h >= kUnreachable) return;
-      const float g = n.g + 1.f + collision_penalty(n.v, u, s, s1, n.t);
+      const bool turned = !rot && u != n.v && n.h != kNoHeading && hd != n.h;  // lg-straight only
+      const float g = n.g + 1.f + collision_penalty(n.v, u, s, s1, n.t) + (turned ? LocalGuidanceConfig::kStraightTieBreak : 0.f);
       if (mk.tag == seen && mk.best_g <= g) return;  // reached as cheaply before
       mk.tag = seen;
       mk.best_g = g;

@@ -209,6 +209,9 @@ std::vector<ParamSpec> guidance_rows(bool product, const std::string& guidance_d
       integer("lg-near-steps", 0, 1000, "3", "conflicts this many steps ahead or more cost lg-far-cost"),
       real("lg-contraflow", 0, 1e6, "0", "cost per guidance path planned the other way along an edge",
            "", ""),
+      flag("lg-straight", "0",
+           "mapf model: among equally cheap guidance paths the one with the fewest changes of direction (for robots "
+           "that turn before a move, as under the ROS node)"),
       flag("lg-lazy", "", "keep guidance paths until they are left or meet another (fleets of thousands)", "",
            "fleet-of-thousands"),
       integer("lg-recheck", 0, 1000, "20", "a kept path is searched again if it meets another within this many steps"),

@@ -38,6 +38,7 @@ LocalGuidanceConfig guidance_config(const PlannerParams& v, uint64_t seed) {
   c.near_steps = v.integer("lg-near-steps");
   c.contraflow_cost = v.real("lg-contraflow");
   c.lazy = v.flag("lg-lazy");
+  c.straight = v.flag("lg-straight");
   c.recheck = v.integer("lg-recheck");
   c.keep = v.integer("lg-keep");
   c.max_expansions = v.integer("lg-expansions");

@@ -203,6 +203,36 @@ TEST(LocalGuidance, ContraflowSendsAnAgentRoundTheRouteNobodyTakesTheOtherWay) {
   }
 }
 
+// lg-straight: on an open 8 x 8 grid, from corner to corner every monotone path is shortest.
+// With the random neighbour order the paths zigzag; with lg-straight every path found turns
+// once, as few times as a shortest path can, and is still shortest.
+TEST(LocalGuidance, StraightPathsTurnAsFewTimesAsAShortestPathCan) {
+  const Grid g = Grid::from_rows(std::vector<std::string>(8, "........"));
+  DistTable dist(g);
+  std::vector<Cell> pos = {g.cell(0, 0)};
+  std::vector<std::vector<Cell>> goals = {{g.cell(7, 7)}};
+  WorldView w{g, dist, 0, pos, goals};
+  for (bool straight : {false, true}) {
+    int most_turns = 0;
+    for (uint64_t seed = 1; seed <= 12; ++seed) {
+      LocalGuidanceConfig cfg;
+      cfg.window = 20;
+      cfg.seed = seed;
+      cfg.straight = straight;
+      LocalGuidance lg(g, 1, cfg);
+      lg.update(w, {0});
+      const auto p = lg.path_from(0, 0);
+      ASSERT_EQ(p.size(), 15u) << "a shortest path";
+      ASSERT_TRUE(is_walk(g, p));
+      int turns = 0;
+      for (size_t k = 2; k < p.size(); ++k) turns += p[k] - p[k - 1] != p[k - 1] - p[k - 2];
+      most_turns = std::max(most_turns, turns);
+    }
+    if (straight) EXPECT_EQ(most_turns, 1);
+    else EXPECT_GT(most_turns, 1) << "random neighbour order zigzags";
+  }
+}
+
 TEST(LocalGuidance, PathEndsOnAGoalAnotherAgentRestsOn) {
   // Agent 1 rests on agent 0's goal, next to agent 0. Every step onto the goal costs a
   // collision, so waiting beside it is as cheap for a few steps; the guidance must still lead

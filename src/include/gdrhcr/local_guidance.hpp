@@ -75,6 +75,10 @@ struct LocalGuidanceConfig {
   // any time in the window (contraflow), so streams through a door or an aisle keep one
   // direction instead of meeting head-on later (0 = none).
   double contraflow_cost = 0;
+  // Mapf model: among equally cheap paths, the one with the fewest changes of direction (a tie
+  // break, kStraightTieBreak per change), for robots that turn before a move into a cell they do
+  // not face (fleet_sim's and real robots under the ROS node).
+  bool straight = false;
   // false: replan every agent every step; true: keep paths until they are left, the goal
   // changes, they meet another path or less than `keep` steps are left (cheaper).
   bool lazy = false;
@@ -90,6 +94,9 @@ struct LocalGuidanceConfig {
   // update has a deadline (a step budget), none without.
   int refine = -1;
   static constexpr int kAnytimePasses = 3;
+  // lg-straight: the cost of a change of direction, below the 1e-3 per path met that prefers the
+  // less crowded of equally cheap steps.
+  static constexpr float kStraightTieBreak = 1e-4f;
 };
 
 class LocalGuidance {
