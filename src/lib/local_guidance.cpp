@@ -429,7 +429,8 @@ void LocalGuidance::plan(const WorldView& world, int i, Search& search, std::min
       const int h = dist_of(u, hd);
       if (h >= kUnreachable) return;
       const bool turned = !rot && u != n.v && n.h != kNoHeading && hd != n.h;  // lg-straight only
-      const float g = n.g + 1.f + collision_penalty(n.v, u, s, s1, n.t) + (turned ? LocalGuidanceConfig::kStraightTieBreak : 0.f);
+      const float g = n.g + 1.f + collision_penalty(n.v, u, s, s1, n.t) +
+                      (turned ? LocalGuidanceConfig::kStraightTieBreak : 0.f);
       if (mk.tag == seen && mk.best_g <= g) return;  // reached as cheaply before
       mk.tag = seen;
       mk.best_g = g;
