@@ -7,7 +7,9 @@
 // so ideas can be tried here before the ROS benchmark (scripts/bench_delays.sh).
 //   delay_benchmark --map maps/warehouse-10-20-10-2-1.map --robots 300 --ticks 300 --p-delay 0.01
 //       --max-delay 20 --planner gd-rhcr --speed 6 --seeds 1 --commit-horizon 2
-//       --between 1 [--param key=value ...]   (planner parameters, e.g. --param guidance=none)
+//       --between 1 [--param key=value ...]   (planner parameters, e.g. --param guidance=none; the
+//       planner's table defaults, except that config/fleet.yaml gives the node lg-straight 1: add
+//       --param lg-straight=1 for the node's planner)
 // --help lists the options with their defaults and ranges; a bad value is an error naming it.
 // --between 1 (default): moves are dispatched the moment the robots ahead have left (the node's
 // dispatch timer, Executor::advance after every substep); 0: at ticks only. --revoke 1 (default):
