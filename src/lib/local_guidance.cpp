@@ -357,7 +357,10 @@ void LocalGuidance::Marks::grow() {
     nb[m] = v, nh[m++] = rotate_ccw(h);
   } else {
     // Mapf: the heading of the move, for lg-straight's tie break only (the search's states are cells).
-    for (Cell u : grid_.neighbours(v)) nb[m] = u, nh[m++] = cfg_.straight ? heading_of_move(grid_, v, u) : kNoHeading;
+    for (Cell u : grid_.neighbours(v)) {
+      if (m == 4) break;  // a grid cell has at most four neighbours (bounds the writes for the compiler)
+      nb[m] = u, nh[m++] = cfg_.straight ? heading_of_move(grid_, v, u) : kNoHeading;
+    }
   }
   for (int a = m - 1; a > 0; --a) {
     const auto r = rng();  // r % (a + 1), with a constant divisor for each of the few a
