@@ -326,21 +326,36 @@ TEST(ExecutorAdg, RandomDelaysNeverCollideNorDeadlock_CatchUp) {
   EXPECT_GE(calm.goals, calm_off.goals) << "no delay: making up the plan's waits costs no goals";
 }
 
+// Catch-up tests: an executor with two moves committed and catch_up steps owed at most, over a
+// scripted planner (FnPlanner) on a small grid.
+struct CatchUpRig {
+  CatchUpRig(const std::vector<std::string>& rows, int n, int catch_up)
+      : g(Grid::from_rows(rows)), dist(g), planner(make_fn_planner(g, n, &fn)), ex(g, dist, n, config(catch_up)) {}
+  static ExecutorConfig config(int catch_up) {
+    ExecutorConfig cfg;
+    cfg.commit_horizon = 2;
+    cfg.catch_up = catch_up;
+    return cfg;
+  }
+  const Grid g;
+  gdrhcr::DistTable dist;
+  FnPlanner* fn = nullptr;
+  std::unique_ptr<DeadlinePlanner> planner;
+  Executor ex;
+};
+
 // Catch-up, step by step: robot 0 is late for two ticks (its queued move is taken back), then
 // arrives with nothing committed. In that tick it gets its planned move and, owed steps, one more
 // along the planner's intended path, so it is two cells on at once; without catch-up only one.
 // Robot 1, which never lost time, gets no extra move, and nobody is sent towards a cell another
 // robot's commitments end in.
 TEST(ExecutorAdg, ARobotThatLostTimeMakesItUpAlongItsPlannedPath) {
-  const Grid g = Grid::from_rows({"........", "........"});
-  gdrhcr::DistTable dist(g);
   for (int catch_up : {0, 100}) {
-    FnPlanner* fn;
-    auto planner = make_fn_planner(g, 2, &fn);
-    ExecutorConfig cfg;
-    cfg.commit_horizon = 2;
-    cfg.catch_up = catch_up;
-    Executor ex(g, dist, 2, cfg);
+    CatchUpRig rig({"........", "........"}, 2, catch_up);
+    const Grid& g = rig.g;
+    FnPlanner* fn = rig.fn;
+    auto& planner = rig.planner;
+    Executor& ex = rig.ex;
     std::vector<RobotRecord> robots{at(g, 0, 0), at(g, 0, 1)};
     int step = 0;
     fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
@@ -384,14 +399,11 @@ TEST(ExecutorAdg, ARobotThatLostTimeMakesItUpAlongItsPlannedPath) {
 // for a robot that has since gone). No robot's commitments end in the cell ahead, so it makes
 // the step up in the same tick; at step 3 it owes nothing and gets its planned move only.
 TEST(ExecutorAdg, AWaitInThePlanIsMadeUpWhenTheWayIsClear) {
-  const Grid g = Grid::from_rows({"........"});
-  gdrhcr::DistTable dist(g);
-  FnPlanner* fn;
-  auto planner = make_fn_planner(g, 1, &fn);
-  ExecutorConfig cfg;
-  cfg.commit_horizon = 2;
-  cfg.catch_up = 100;
-  Executor ex(g, dist, 1, cfg);
+  CatchUpRig rig({"........"}, 1, 100);
+  const Grid& g = rig.g;
+  FnPlanner* fn = rig.fn;
+  auto& planner = rig.planner;
+  Executor& ex = rig.ex;
   std::vector<RobotRecord> robots{at(g, 0, 0)};
   int step = 0;
   fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
@@ -415,14 +427,11 @@ TEST(ExecutorAdg, AWaitInThePlanIsMadeUpWhenTheWayIsClear) {
 // Catch-up never sends a robot into a cell another robot's commitments end in: robot 0 is owed
 // steps, but the cell its planner intends next is where robot 1 ends; it makes no extra move.
 TEST(ExecutorAdg, CatchUpKeepsOutOfCellsOthersEndIn) {
-  const Grid g = Grid::from_rows({"......"});
-  gdrhcr::DistTable dist(g);
-  FnPlanner* fn;
-  auto planner = make_fn_planner(g, 2, &fn);
-  ExecutorConfig cfg;
-  cfg.commit_horizon = 2;
-  cfg.catch_up = 100;
-  Executor ex(g, dist, 2, cfg);
+  CatchUpRig rig({"......"}, 2, 100);
+  const Grid& g = rig.g;
+  FnPlanner* fn = rig.fn;
+  auto& planner = rig.planner;
+  Executor& ex = rig.ex;
   std::vector<RobotRecord> robots{at(g, 0, 0), at(g, 3, 0)};
   int step = 0;
   fn->fn = [&](const gdrhcr::WorldView& w, std::vector<Cell>& next) {
