@@ -259,6 +259,10 @@ std::vector<ParamSpec> gd_rhcr_table() {
            "groups with more than this share of the free cells around them occupied go to the secondary solver", "",
            "1"),
       integer("density-margin", 0, 1 << 20, "4", "cells around a group's bounding box counted for max-density"),
+      integer("lns-window", 0, 1000, "0",
+              "steps of the joint plan the rest of the step budget improves by LNS (0 = off; window_lns.hpp)"),
+      integer("lns-neighbours", 1, 1000, "8", "agents an LNS neighbourhood plans again together"),
+      integer("lns-iterations", 0, 1000000, "0", "LNS neighbourhoods per step (0 = until the step budget)"),
   };
   for (auto& r : pibt_rows()) t.push_back(r);
   for (auto& r : guidance_rows(true, "local")) t.push_back(r);

@@ -10,6 +10,7 @@
 #include "gdrhcr/planner.hpp"
 #include "gdrhcr/planner_params.hpp"
 #include "gdrhcr/rhcr.hpp"
+#include "gdrhcr/window_lns.hpp"
 
 namespace gdrhcr {
 namespace {
@@ -74,7 +75,19 @@ std::unique_ptr<Planner> make_rhcr(const PlannerParams& v, const Grid& grid, int
 }
 
 std::unique_ptr<Planner> make_gd_rhcr(const PlannerParams& v, const Grid& grid, int n, uint64_t seed, ActionModel m) {
-  return std::make_unique<GdRhcrPlanner>(grid, n, seed, gd_rhcr_config(v, seed), m);
+  auto planner = std::make_unique<GdRhcrPlanner>(grid, n, seed, gd_rhcr_config(v, seed), m);
+  if (v.integer("lns-window") <= 0) return planner;
+  WindowLnsConfig c;
+  c.window = v.integer("lns-window");
+  c.neighbourhood = v.integer("lns-neighbours");
+  c.iterations = v.integer("lns-iterations");
+  c.step_budget_s = v.real("step-budget");
+  c.seed = seed;
+  PibtOptions rollout = pibt_options(v);
+  rollout.rotation = PibtOptions::Rotation::kCells;
+  rollout.rotation_commit = false;
+  rollout.rotation_starts = 1;
+  return std::make_unique<WindowLns>(std::move(planner), grid, n, c, rollout, m);
 }
 
 using Factory = std::unique_ptr<Planner> (*)(const PlannerParams&, const Grid&, int, uint64_t, ActionModel);

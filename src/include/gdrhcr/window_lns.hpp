@@ -1,0 +1,95 @@
+// The anytime part of a step (issue 24): windowed large neighbourhood search over the joint plan of
+// the coming steps, after WPPL (Jiang, Zhang, Xiong, Li, Koenig, Li, "Scaling Lifelong Multi-Agent
+// Path Finding to More Realistic Settings: Research Challenges and Opportunities", SoCS 2024, arXiv
+// 2404.16162), which improves windowed PIBT with LNS in the rest of the League's second; the
+// neighbourhoods and the replanning are MAPF-LNS's (Li, Chen, Harabor, Stuckey, Koenig, "Anytime
+// Multi-Agent Path Finding via Large Neighborhood Search", IJCAI 2021).
+//
+// Every step the planner beneath (GD-RHCR, PIBT) first makes a valid step, as without this layer.
+// PIBT then carries that step on to a joint plan of `window` steps (each step valid: no vertex or
+// edge conflict, every transition one action of the model in force). Each agent's cost in the plan
+// is the step at which it first stands on its goal and can stay there to the window's end, or,
+// when it does not, the window plus its distance (with turns) from where the window leaves it. Then,
+// until the step's deadline: an agent that the plan delays (its cost above its distance) is picked
+// at random, with the agents nearest it; their paths are taken out and planned again one by one in
+// a random order, each by space-time A* over the model's states around the paths of all the
+// others; the new paths are kept when they cost less in sum, else the old ones come back. The
+// first step of the final plan is executed. Only plans free of conflicts are ever held, so what is
+// executed is valid whenever the search stops. Robots that cannot move and blocked cells (the ROS
+// node's offline robots and late robots' cells) turn the search off for that step: the step of the
+// planner beneath is executed as it is.
+#pragma once
+
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "gdrhcr/pibt.hpp"
+#include "gdrhcr/planner.hpp"
+
+namespace gdrhcr {
+
+struct WindowLnsConfig {
+  int window = 0;          // steps of the joint plan (0 = off: the planner beneath alone)
+  int neighbourhood = 8;   // agents planned again together
+  int iterations = 0;      // neighbourhoods tried per step (0 = until the deadline)
+  double step_budget_s = 0;  // the step's wall-clock budget (0 = none; the caller's may be smaller)
+  // Of the budget: the planner beneath gets this share, and the search stops at kStopShare.
+  static constexpr double kInnerShare = 0.5;
+  static constexpr double kStopShare = 0.9;
+  static constexpr int kMaxExpansions = 20000;  // per A*; a search cut short fails
+  uint64_t seed = 0;
+};
+
+class WindowLns : public Planner {
+ public:
+  // `rollout` are the options of the PIBT that carries the first step on (its own instance).
+  WindowLns(std::unique_ptr<Planner> inner, const Grid& grid, int num_agents, WindowLnsConfig config,
+            PibtOptions rollout, ActionModel model);
+  ~WindowLns() override;
+  std::string name() const override { return inner_->name(); }
+  StepReport plan_step(const WorldView& world, std::vector<Cell>& next) override;
+  nlohmann::json params() const override;
+  // The planner beneath's stats, plus lns_* counters: steps searched, neighbourhoods tried and
+  // kept, the plan cost the search took off, and the time spent.
+  nlohmann::json stats() const override;
+  std::vector<PlannerGroup> groups() const override { return inner_->groups(); }
+  std::vector<Cell> planned_path(int agent) const override;
+
+  // The joint plan of the last step, per agent: poses at t = 0 .. window (empty when the search
+  // did not run), and its summed cost (as above). For tests.
+  const std::vector<std::vector<Pose>>& plan() const { return paths_; }
+  long plan_cost() const;
+
+ private:
+  struct Search;  // the scratch tables of one A*
+  void rollout(const WorldView& world, const std::vector<Cell>& next);
+  std::vector<std::vector<Pose>> carried_plan(const WorldView& world) const;
+  long cost_of(const WorldView& world, int agent, const std::vector<Pose>& path) const;
+  void reserve(int agent, const std::vector<Pose>& path, bool on);
+  bool replan(const WorldView& world, int agent, std::vector<Pose>& path);
+  std::vector<int> neighbourhood(const WorldView& world, int seed_agent);
+  bool improve_once(const WorldView& world);
+  int& at(int t, Cell c) { return reserved_[static_cast<size_t>(t) * cells_ + c]; }
+  int at(int t, Cell c) const { return reserved_[static_cast<size_t>(t) * cells_ + c]; }
+
+  std::unique_ptr<Planner> inner_;
+  const Grid& grid_;
+  WindowLnsConfig cfg_;
+  ActionModel model_;
+  PibtStep pibt_;
+  std::mt19937_64 rng_;
+  int cells_;
+  std::vector<std::vector<Pose>> paths_;
+  std::vector<long> cost_, lower_;  // per agent: its cost in the plan, its distance (no plan costs less)
+  std::vector<int> delayed_;        // the agents whose cost is above their distance, at the step's start
+  std::vector<int> reserved_;  // per (t, cell): the agent planned there, or -1
+  std::vector<std::shared_ptr<const DistRow>> rows_;
+  std::unique_ptr<Search> search_;
+  std::vector<std::vector<Pose>> last_;  // the plan of the step before
+  int last_timestep_ = -2;
+  long steps_searched_ = 0, carried_ = 0, tried_ = 0, kept_ = 0, gained_ = 0, failed_ = 0;
+  double search_s_ = 0;
+};
+
+}  // namespace gdrhcr

@@ -1,0 +1,333 @@
+// See window_lns.hpp (issue 24; WPPL, arXiv 2404.16162; MAPF-LNS, IJCAI 2021).
+#include "gdrhcr/window_lns.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <numeric>
+#include <stdexcept>
+
+#include "gdrhcr/open_list.hpp"
+
+namespace gdrhcr {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+constexpr int kNeighbourRadius = 4;  // agents this many steps from the picked one join it
+constexpr float kTurnTieBreak = 1e-3f;
+constexpr float kKeepTieBreak = 1e-2f;
+}  // namespace
+
+// One space-time A*'s scratch: per state (t, cell, heading) a stamp and a parent, reset in O(1)
+// by bumping the stamp.
+struct WindowLns::Search {
+  std::vector<uint32_t> seen, closed;
+  std::vector<int32_t> parent;
+  std::vector<float> g;
+  uint32_t stamp = 0;
+  OpenList open;
+  void begin(size_t states) {
+    if (seen.size() != states)
+      seen.assign(states, 0), closed.assign(states, 0), parent.assign(states, -1), g.assign(states, 0);
+    if (++stamp == 0) {
+      std::fill(seen.begin(), seen.end(), 0);
+      std::fill(closed.begin(), closed.end(), 0);
+      stamp = 1;
+    }
+    open.clear();
+  }
+};
+
+WindowLns::WindowLns(std::unique_ptr<Planner> inner, const Grid& grid, int num_agents, WindowLnsConfig config,
+                     PibtOptions rollout, ActionModel model)
+    : inner_(std::move(inner)),
+      grid_(grid),
+      cfg_(config),
+      model_(model),
+      pibt_(grid, num_agents, config.seed ^ 0x5eedULL, rollout),
+      rng_(config.seed),
+      cells_(grid.num_cells()),
+      search_(std::make_unique<Search>()) {
+  if (cfg_.window < 1) throw std::invalid_argument("window LNS: the window must be at least one step");
+  if (cfg_.neighbourhood < 1) throw std::invalid_argument("window LNS: a neighbourhood needs at least one agent");
+}
+
+WindowLns::~WindowLns() = default;
+
+nlohmann::json WindowLns::params() const {
+  nlohmann::json j = inner_->params();
+  j["lns_window"] = cfg_.window;
+  j["lns_neighbourhood"] = cfg_.neighbourhood;
+  j["lns_iterations"] = cfg_.iterations;
+  return j;
+}
+
+nlohmann::json WindowLns::stats() const {
+  nlohmann::json j = inner_->stats();
+  j["lns_steps"] = steps_searched_;
+  j["lns_steps_carried"] = carried_;
+  j["lns_neighbourhoods"] = tried_;
+  j["lns_kept"] = kept_;
+  j["lns_cost_gained"] = gained_;
+  j["lns_failed_searches"] = failed_;
+  j["lns_time_s"] = search_s_;
+  return j;
+}
+
+std::vector<Cell> WindowLns::planned_path(int agent) const {
+  if (paths_.empty()) return inner_->planned_path(agent);
+  std::vector<Cell> cells;
+  for (const Pose& p : paths_[agent]) cells.push_back(p.cell);
+  return cells;
+}
+
+long WindowLns::plan_cost() const { return std::accumulate(cost_.begin(), cost_.end(), 0L); }
+
+// The step the agent first stands on its goal, else the window plus the distance from its last pose.
+long WindowLns::cost_of(const WorldView&, int agent, const std::vector<Pose>& path) const {
+  const DistRow& row = *rows_[agent];
+  for (int t = 0; t <= cfg_.window; ++t)
+    if (path[t].cell == row.goal()) return t;
+  return cfg_.window + row.at(path[cfg_.window].cell, path[cfg_.window].heading);
+}
+
+void WindowLns::reserve(int agent, const std::vector<Pose>& path, bool on) {
+  for (int t = 0; t <= cfg_.window; ++t) at(t, path[t].cell) = on ? agent : -1;
+}
+
+// PIBT carries the planner's first step on to the window's end; an agent that reaches its goal on
+// the way sets out for its next known one.
+void WindowLns::rollout(const WorldView& world, const std::vector<Cell>& next) {
+  const int n = world.num_agents();
+  const bool rot = world.rotation();
+  paths_.assign(n, std::vector<Pose>(cfg_.window + 1));
+  std::vector<std::vector<Cell>> goals(n);
+  std::vector<size_t> goal_index(n, 0);
+  for (int i = 0; i < n; ++i) {
+    paths_[i][0] = world.pose(i);
+    paths_[i][1] = {next[i], rot ? (*world.next_headings)[i] : kEast};
+    goals[i] = {world.goals[i][0]};
+  }
+  auto advance_goal = [&](int i, Cell at) {
+    if (at != goals[i][0]) return;
+    if (goal_index[i] + 1 < world.goals[i].size()) goals[i][0] = world.goals[i][++goal_index[i]];
+  };
+  for (int i = 0; i < n; ++i) advance_goal(i, next[i]);
+  std::vector<Cell> pos(n), nxt(n);
+  std::vector<Heading> heads(n), next_heads(n);
+  for (int t = 1; t < cfg_.window; ++t) {
+    for (int i = 0; i < n; ++i) pos[i] = paths_[i][t].cell, heads[i] = paths_[i][t].heading;
+    WorldView view{world.grid, world.dist, world.timestep + t, pos, goals};
+    view.action_model = world.action_model;
+    if (rot) view.headings = &heads, view.next_headings = &next_heads;
+    pibt_.step(view, nxt);
+    for (int i = 0; i < n; ++i) {
+      paths_[i][t + 1] = {nxt[i], rot ? next_heads[i] : kEast};
+      advance_goal(i, nxt[i]);
+    }
+  }
+}
+
+// Last step's plan one step on, everyone waiting at its end for the new last step; empty when some
+// agent is not where that plan put it.
+std::vector<std::vector<Pose>> WindowLns::carried_plan(const WorldView& world) const {
+  const int n = world.num_agents();
+  if (static_cast<int>(last_.size()) != n) return {};
+  for (int i = 0; i < n; ++i)
+    if (last_[i][1] != world.pose(i)) return {};
+  std::vector<std::vector<Pose>> plan(n);
+  for (int i = 0; i < n; ++i) {
+    plan[i].assign(last_[i].begin() + 1, last_[i].end());
+    plan[i].push_back(plan[i].back());
+  }
+  return plan;
+}
+
+// Space-time A* for `agent` around everyone's reservations (its own taken out), minimising cost_of
+// with the goal held to the window's end; false when none is found within kMaxExpansions.
+bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& path) {
+  const DistRow& row = *rows_[agent];
+  const Cell goal = row.goal();
+  const int W = cfg_.window;
+  const int K = world.rotation() ? kNumHeadings : 1;
+  const size_t layer = static_cast<size_t>(cells_) * K;
+  Search& s = *search_;
+  s.begin(layer * (W + 1));
+  auto id_of = [&](int t, Cell c, Heading h) { return static_cast<int32_t>(t * layer + static_cast<size_t>(c) * K + (K > 1 ? h : 0)); };
+  auto h_of = [&](Cell c, Heading h) { return K > 1 ? row.at(c, h) : row[c]; };
+  auto free_to_end = [&](int t, Cell c) {
+    for (int u = t + 1; u <= W; ++u)
+      if (at(u, c) >= 0) return false;
+    return true;
+  };
+  const Pose start = path[0];
+  // Among equally cheap paths, the one the last step planned (carried one step on).
+  const bool keep = static_cast<int>(last_.size()) > agent && last_[agent][1] == start;
+  const int32_t id0 = id_of(0, start.cell, start.heading);
+  s.seen[id0] = s.stamp, s.parent[id0] = -1, s.g[id0] = 0;
+  s.open.push(static_cast<float>(h_of(start.cell, start.heading)), 0, id0);
+  int expansions = 0;
+  int32_t found = -1;
+  while (!s.open.empty() && expansions < WindowLnsConfig::kMaxExpansions) {
+    const int32_t id = s.open.pop();
+    if (s.closed[id] == s.stamp) continue;
+    s.closed[id] = s.stamp;
+    ++expansions;
+    const int t = static_cast<int>(id / layer);
+    const size_t rest = id % layer;
+    const Cell c = static_cast<Cell>(rest / K);
+    const Heading hd = static_cast<Heading>(K > 1 ? rest % K : kEast);
+    if ((c == goal && free_to_end(t, c)) || t == W) {
+      found = id;
+      break;
+    }
+    auto visit = [&](Cell c2, Heading h2) {
+      if (at(t + 1, c2) >= 0) return;
+      if (c2 != c) {  // a swap with the agent coming the other way
+        const int b = at(t, c2);
+        if (b >= 0 && at(t + 1, c) == b) return;
+      }
+      const int d = h_of(c2, h2);
+      if (d >= kUnreachable) return;
+      const int32_t id2 = id_of(t + 1, c2, h2);
+      // A step costs 1; a turn kTurnTieBreak more, so a wait beats a turn and its undoing.
+      float g2 = s.g[id] + (c2 == c && h2 != hd ? kTurnTieBreak : 0.0f);
+      if (keep && t + 2 <= W && last_[agent][t + 2] != Pose{c2, K > 1 ? h2 : kEast}) g2 += kKeepTieBreak;
+      if (s.seen[id2] == s.stamp && s.g[id2] <= g2) return;
+      s.seen[id2] = s.stamp, s.parent[id2] = id, s.g[id2] = g2;
+      s.open.push(static_cast<float>(t + 1 + d) + g2, t + 1, id2);
+    };
+    if (K > 1) {
+      for (Action a : {Action::kForward, Action::kClockwise, Action::kCounterClockwise, Action::kWait}) {
+        const Pose p = apply_action(grid_, {c, hd}, a);
+        if (p.cell != kNoCell) visit(p.cell, p.heading);
+      }
+    } else {
+      visit(c, kEast);
+      for (Cell c2 : grid_.neighbours(c)) visit(c2, kEast);
+    }
+  }
+  if (found < 0) return false;
+  int t = static_cast<int>(found / layer);
+  for (int u = t + 1; u <= W; ++u) {  // holds the goal, or t == W
+    const size_t rest = found % layer;
+    path[u] = {static_cast<Cell>(rest / K), static_cast<Heading>(K > 1 ? rest % K : kEast)};
+  }
+  for (int32_t id = found; id >= 0; id = s.parent[id], --t) {
+    const size_t rest = id % layer;
+    path[t] = {static_cast<Cell>(rest / K), static_cast<Heading>(K > 1 ? rest % K : kEast)};
+  }
+  return true;
+}
+
+// The picked agent and the agents standing nearest it (breadth first, up to kNeighbourRadius steps).
+std::vector<int> WindowLns::neighbourhood(const WorldView& world, int seed_agent) {
+  std::vector<int> agents{seed_agent};
+  std::vector<Cell> frontier{world.positions[seed_agent]}, next_frontier;
+  std::vector<Cell> visited{world.positions[seed_agent]};
+  for (int r = 0; r < kNeighbourRadius && static_cast<int>(agents.size()) < cfg_.neighbourhood; ++r) {
+    next_frontier.clear();
+    for (Cell c : frontier)
+      for (Cell c2 : grid_.neighbours(c)) {
+        if (std::find(visited.begin(), visited.end(), c2) != visited.end()) continue;
+        visited.push_back(c2);
+        next_frontier.push_back(c2);
+      }
+    std::shuffle(next_frontier.begin(), next_frontier.end(), rng_);
+    for (Cell c2 : next_frontier) {
+      const int b = at(0, c2);
+      if (b >= 0 && static_cast<int>(agents.size()) < cfg_.neighbourhood) agents.push_back(b);
+    }
+    frontier.swap(next_frontier);
+  }
+  return agents;
+}
+
+bool WindowLns::improve_once(const WorldView& world) {
+  // The picked agent: of two delayed agents drawn at random, the one the plan delays more.
+  int pick = -1;
+  long delay = 0;
+  for (int k = 0; k < 2; ++k) {
+    const int a = delayed_[rng_() % delayed_.size()];
+    const long d = cost_[a] - lower_[a];
+    if (pick < 0 || d > delay) pick = a, delay = d;
+  }
+  if (delay <= 0) return false;
+  std::vector<int> agents = neighbourhood(world, pick);
+  std::shuffle(agents.begin(), agents.end(), rng_);
+  ++tried_;
+  long before = 0, after = 0;
+  std::vector<std::vector<Pose>> old;
+  for (int a : agents) before += cost_[a], old.push_back(paths_[a]), reserve(a, paths_[a], false);
+  size_t done = 0;
+  for (; done < agents.size(); ++done) {
+    const int a = agents[done];
+    if (!replan(world, a, paths_[a])) break;
+    reserve(a, paths_[a], true);
+    after += cost_of(world, a, paths_[a]);
+  }
+  if (done == agents.size() && after < before) {
+    for (int a : agents) cost_[a] = cost_of(world, a, paths_[a]);
+    ++kept_, gained_ += before - after;
+    return true;
+  }
+  if (done < agents.size()) ++failed_;
+  for (size_t k = 0; k < done; ++k) reserve(agents[k], paths_[agents[k]], false);
+  for (size_t k = 0; k < agents.size(); ++k) paths_[agents[k]] = old[k], reserve(agents[k], old[k], true);
+  return false;
+}
+
+StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next) {
+  const auto t0 = Clock::now();
+  double budget = cfg_.step_budget_s;
+  if (world.step_budget_s > 0) budget = budget > 0 ? std::min(budget, world.step_budget_s) : world.step_budget_s;
+  WorldView view = world;
+  if (budget > 0) view.step_budget_s = budget * WindowLnsConfig::kInnerShare;
+  StepReport report = inner_->plan_step(view, next);
+  paths_.clear();
+  if (world.timestep != last_timestep_ + 1) last_.clear();
+  const bool taken = (world.immovable && std::any_of(world.immovable->begin(), world.immovable->end(),
+                                                     [](uint8_t x) { return x != 0; })) ||
+                     (world.blocked && !world.blocked->empty());
+  if (taken || (budget <= 0 && cfg_.iterations <= 0) || world.num_agents() == 0) return report;
+  const auto stop = t0 + std::chrono::duration_cast<Clock::duration>(
+                             std::chrono::duration<double>(budget * WindowLnsConfig::kStopShare));
+  const auto s0 = Clock::now();
+  const int n = world.num_agents();
+  rows_.resize(n);
+  for (int i = 0; i < n; ++i)
+    if (!rows_[i] || rows_[i]->goal() != world.goals[i][0]) rows_[i] = world.dist.row(world.goals[i][0]);
+  std::vector<std::vector<Pose>> kept;  // carried_plan(world) jams: see docs/results.md
+  rollout(world, next);
+  if (!kept.empty()) {
+    long fresh = 0, carried = 0;
+    for (int i = 0; i < n; ++i) fresh += cost_of(world, i, paths_[i]), carried += cost_of(world, i, kept[i]);
+    if (carried < fresh) paths_.swap(kept), ++carried_;
+  }
+  reserved_.assign(static_cast<size_t>(cfg_.window + 1) * cells_, -1);
+  cost_.assign(n, 0);
+  lower_.assign(n, 0);
+  delayed_.clear();
+  for (int i = 0; i < n; ++i) {
+    reserve(i, paths_[i], true);
+    cost_[i] = cost_of(world, i, paths_[i]);
+    lower_[i] = world.rotation() ? rows_[i]->at(world.positions[i], (*world.headings)[i]) : (*rows_[i])[world.positions[i]];
+    if (cost_[i] > lower_[i]) delayed_.push_back(i);
+  }
+  ++steps_searched_;
+  for (int k = 0; !delayed_.empty() && (cfg_.iterations <= 0 || k < cfg_.iterations); ++k) {
+    if (budget > 0 && Clock::now() >= stop) break;
+    improve_once(world);
+  }
+  for (int i = 0; i < n; ++i) {
+    next[i] = paths_[i][1].cell;
+    if (world.rotation()) (*world.next_headings)[i] = paths_[i][1].heading;
+  }
+  last_ = paths_;
+  last_timestep_ = world.timestep;
+  search_s_ += std::chrono::duration<double>(Clock::now() - s0).count();
+  report.planned = true;
+  report.plan_time_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  return report;
+}
+
+}  // namespace gdrhcr

@@ -1,0 +1,157 @@
+// The windowed LNS over the coming steps (window_lns.hpp): every step it executes is valid in the
+// model in force (the simulator throws on a conflict), the joint plan it holds is free of
+// conflicts and made of the model's actions, the plan's cost is what the file comment says, and
+// the search does lower it.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+
+#include "gdrhcr/planner.hpp"
+#include "gdrhcr/simulator.hpp"
+#include "gdrhcr/task_stream.hpp"
+#include "gdrhcr/window_lns.hpp"
+
+using namespace gdrhcr;
+
+namespace {
+std::string repo(const std::string& rel) { return std::string(GDRHCR_SOURCE_DIR) + "/" + rel; }
+
+Params lns_params(int window, int iterations) {
+  Params p;
+  p.set("lns-window", std::to_string(window));
+  p.set("lns-iterations", std::to_string(iterations));
+  return p;
+}
+
+// Checks the plan the planner holds after a step of `world`: it starts where the agents stand,
+// every transition is one action of the model, no two agents share a cell at a time or swap cells,
+// and its cost is the sum of each agent's (the step it first stands on its goal, else the window
+// plus its distance from where the window leaves it).
+void check_plan(const WindowLns& lns, const WorldView& world, int window) {
+  const auto& plan = lns.plan();
+  ASSERT_EQ(static_cast<int>(plan.size()), world.num_agents());
+  long cost = 0;
+  for (int i = 0; i < world.num_agents(); ++i) {
+    ASSERT_EQ(static_cast<int>(plan[i].size()), window + 1);
+    EXPECT_EQ(plan[i][0].cell, world.positions[i]);
+    const DistRow& row = *world.dist.row(world.goals[i][0]);
+    long c = -1;
+    for (int t = 0; t <= window && c < 0; ++t)
+      if (plan[i][t].cell == row.goal()) c = t;
+    if (c < 0) c = window + row.at(plan[i][window].cell, world.rotation() ? plan[i][window].heading : kEast);
+    cost += c;
+    for (int t = 0; t < window; ++t) {
+      if (world.rotation())
+        EXPECT_TRUE(action_between(world.grid, plan[i][t], plan[i][t + 1]).has_value()) << "agent " << i << " t " << t;
+      else
+        EXPECT_TRUE(world.grid.step_allowed(plan[i][t].cell, plan[i][t + 1].cell)) << "agent " << i << " t " << t;
+    }
+  }
+  EXPECT_EQ(cost, lns.plan_cost());
+  for (int t = 0; t <= window; ++t) {
+    std::map<Cell, int> at;
+    for (int i = 0; i < world.num_agents(); ++i) {
+      const auto [it, fresh] = at.emplace(plan[i][t].cell, i);
+      EXPECT_TRUE(fresh) << "agents " << it->second << " and " << i << " share " << world.grid.describe(plan[i][t].cell)
+                         << " at t " << t;
+    }
+    if (t == 0) continue;
+    std::map<std::pair<Cell, Cell>, int> moves;
+    for (int i = 0; i < world.num_agents(); ++i)
+      if (plan[i][t - 1].cell != plan[i][t].cell) moves[{plan[i][t - 1].cell, plan[i][t].cell}] = i;
+    for (auto& [m, i] : moves) EXPECT_EQ(moves.count({m.second, m.first}), 0u) << "agent " << i << " swaps at t " << t;
+  }
+}
+}  // namespace
+
+TEST(WindowLns, HoldsAConflictFreePlanOfTheModelsActionsAndLowersItsCost) {
+  const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+  for (ActionModel model : {ActionModel::kRotation, ActionModel::kMapf}) {
+    SCOPED_TRACE(action_model_name(model));
+    const int n = 200, window = 8;
+    DistTable dist(g, model);
+    RandomNavigationStream tasks(g, 3);
+    std::vector<Cell> pos = random_starts(g, n, 3);
+    std::vector<Heading> heads(n, kEast), next_heads(n, kEast);
+    std::vector<std::vector<Cell>> goals(n);
+    for (int i = 0; i < n; ++i) goals[i] = {tasks.next_goal(i, pos[i])};
+    Params params = lns_params(window, 200);
+    auto planner = make_planner("gd-rhcr", params, g, n, 3, model);
+    auto* lns = dynamic_cast<WindowLns*>(planner.get());
+    ASSERT_NE(lns, nullptr) << "lns-window > 0 wraps GD-RHCR in the windowed LNS";
+    long gained = 0;
+    for (int step = 0; step < 20; ++step) {
+      WorldView world{g, dist, step, pos, goals};
+      world.action_model = model;
+      if (model == ActionModel::kRotation) world.headings = &heads, world.next_headings = &next_heads;
+      std::vector<Cell> next(n);
+      planner->plan_step(world, next);
+      check_plan(*lns, world, window);
+      for (int i = 0; i < n; ++i) {
+        EXPECT_EQ(next[i], lns->plan()[i][1].cell);  // the plan's first step is what is executed
+        pos[i] = next[i];
+        heads[i] = next_heads[i];
+        if (pos[i] == goals[i][0]) goals[i] = {tasks.next_goal(i, pos[i])};
+      }
+      gained = planner->stats()["lns_cost_gained"].get<long>();
+    }
+    EXPECT_GT(gained, 0) << "200 neighbourhoods a step never lowered the plan's cost";
+    EXPECT_GT(planner->stats()["lns_kept"].get<long>(), 0);
+  }
+}
+
+TEST(WindowLns, RunsAreValidAndReachGoalsInBothModels) {
+  for (ActionModel model : {ActionModel::kRotation, ActionModel::kMapf}) {
+    for (const char* map : {"random-32-32-20.map", "warehouse-10-20-10-2-1.map", "room-32-32-4.map"}) {
+      SCOPED_TRACE(std::string(map) + " in " + action_model_name(model));
+      const Grid g = Grid::load(repo(std::string("maps/") + map));
+      DistTable dist(g, model);
+      RandomNavigationStream tasks(g, 5);
+      const int n = 120;
+      const auto starts = random_starts(g, n, 5);
+      Params params = lns_params(10, 30);
+      auto planner = make_planner("gd-rhcr", params, g, n, 5, model);
+      SimOptions opt;
+      opt.steps = 60;
+      opt.action_model = model;
+      const SimResult r = run_simulation(g, dist, tasks, *planner, starts, opt);
+      EXPECT_EQ(r.collisions, 0);
+      EXPECT_GT(r.goals_reached, n / 4);
+      EXPECT_GT(planner->stats()["lns_kept"].get<long>(), 0);
+    }
+  }
+}
+
+TEST(WindowLns, StepsOfThePlannerBeneathAreKeptWhenRobotsCannotMove) {
+  const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+  const int n = 60;
+  DistTable dist(g, ActionModel::kMapf);
+  RandomNavigationStream tasks(g, 9);
+  std::vector<Cell> pos = random_starts(g, n, 9);
+  std::vector<std::vector<Cell>> goals(n);
+  for (int i = 0; i < n; ++i) goals[i] = {tasks.next_goal(i, pos[i])};
+  std::vector<uint8_t> immovable(n, 0);
+  immovable[0] = 1;
+  Params params = lns_params(6, 50);
+  auto planner = make_planner("gd-rhcr", params, g, n, 9, ActionModel::kMapf);
+  WorldView world{g, dist, 0, pos, goals, &immovable};
+  std::vector<Cell> next(n);
+  planner->plan_step(world, next);
+  EXPECT_EQ(next[0], pos[0]);
+  EXPECT_TRUE(dynamic_cast<WindowLns&>(*planner).plan().empty()) << "no search beside a robot that cannot move";
+  EXPECT_EQ(planner->stats()["lns_steps"].get<long>(), 0);
+}
+
+TEST(WindowLns, OffByDefaultAndBadValuesAreRefused) {
+  const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+  Params none;
+  auto plain = make_planner("gd-rhcr", none, g, 10, 1, ActionModel::kRotation);
+  EXPECT_EQ(dynamic_cast<WindowLns*>(plain.get()), nullptr);
+  Params bad;
+  bad.set("lns-window", "-3");
+  EXPECT_THROW(make_planner("gd-rhcr", bad, g, 10, 1, ActionModel::kRotation), ParamError);
+  Params bad_n;
+  bad_n.set("lns-neighbours", "0");
+  EXPECT_THROW(make_planner("gd-rhcr", bad_n, g, 10, 1, ActionModel::kRotation), ParamError);
+}
