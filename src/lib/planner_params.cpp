@@ -75,6 +75,13 @@ std::string rule_lanes(const std::string& param, const MapFacts& f, const Planne
     return f.model() == ActionModel::kRotation && (thousands(f) || crowded_fleet(f)) ? "lines" : "aisles";
   return f.model() == ActionModel::kRotation ? "2" : "0";
 }
+// The anytime windowed LNS (window_lns.hpp) in the rotation model where the fleet leaves room to
+// go round: at most a third of the free cells. Denser, single-agent replanning among the others'
+// paths mostly fails, and the plans it does change turn agents back and forth from step to step.
+constexpr double kLnsFleetShare = 1.0 / 3;
+std::string rule_lns(const std::string&, const MapFacts& f, const PlannerParams&) {
+  return f.model() == ActionModel::kRotation && f.fleet_share() <= kLnsFleetShare ? "10" : "0";
+}
 std::string rule_far_cost(const std::string&, const MapFacts&, const PlannerParams& earlier) {
   const bool forecast = earlier.text("guidance") == "local" && earlier.integer("lg-forecast") >= 2;
   return forecast ? "2" : "-1";
@@ -116,6 +123,10 @@ const std::vector<ParamRule>& param_rules() {
        "the map's one-cell aisles, and for fleets of more than 2,000 agents or holding more than 90% of the free "
        "cells every row and column one can travel along (lanes lines); mapf model: none",
        std::string(kRulesFigure) + "lanes", rule_lanes},
+      {"anytime-lns",
+       "rotation model, fleets holding at most a third of the free cells: the rest of the step budget improves a "
+       "10-step joint plan by LNS (lns-window 10); elsewhere off (0)",
+       std::string(kRulesFigure) + "anytime-lns", rule_lns},
       {"far-cost", "where the motion forecast runs, conflicts lg-near-steps or more ahead cost 2; else as lg-cost (-1)",
        std::string(kRulesFigure) + "far-cost", rule_far_cost},
   };
@@ -259,8 +270,9 @@ std::vector<ParamSpec> gd_rhcr_table() {
            "groups with more than this share of the free cells around them occupied go to the secondary solver", "",
            "1"),
       integer("density-margin", 0, 1 << 20, "4", "cells around a group's bounding box counted for max-density"),
-      integer("lns-window", 0, 1000, "0",
-              "steps of the joint plan the rest of the step budget improves by LNS (0 = off; window_lns.hpp)"),
+      integer("lns-window", 0, 1000, "",
+              "steps of the joint plan the rest of the step budget improves by LNS (0 = off; window_lns.hpp)",
+              "anytime-lns", "0"),
       integer("lns-neighbours", 1, 1000, "8", "agents an LNS neighbourhood plans again together"),
       integer("lns-iterations", 0, 1000000, "0", "LNS neighbourhoods per step (0 = until the step budget)"),
   };

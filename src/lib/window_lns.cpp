@@ -11,7 +11,6 @@
 namespace gdrhcr {
 
 namespace {
-using Clock = std::chrono::steady_clock;
 constexpr int kNeighbourRadius = 4;  // agents this many steps from the picked one join it
 constexpr float kTurnTieBreak = 1e-3f;
 constexpr float kKeepTieBreak = 1e-2f;
@@ -64,7 +63,7 @@ nlohmann::json WindowLns::params() const {
 nlohmann::json WindowLns::stats() const {
   nlohmann::json j = inner_->stats();
   j["lns_steps"] = steps_searched_;
-  j["lns_steps_carried"] = carried_;
+  j["lns_steps_cut"] = rollouts_cut_;
   j["lns_neighbourhoods"] = tried_;
   j["lns_kept"] = kept_;
   j["lns_cost_gained"] = gained_;
@@ -96,7 +95,7 @@ void WindowLns::reserve(int agent, const std::vector<Pose>& path, bool on) {
 
 // PIBT carries the planner's first step on to the window's end; an agent that reaches its goal on
 // the way sets out for its next known one.
-void WindowLns::rollout(const WorldView& world, const std::vector<Cell>& next) {
+bool WindowLns::rollout(const WorldView& world, const std::vector<Cell>& next, Clock::time_point stop) {
   const int n = world.num_agents();
   const bool rot = world.rotation();
   paths_.assign(n, std::vector<Pose>(cfg_.window + 1));
@@ -124,22 +123,9 @@ void WindowLns::rollout(const WorldView& world, const std::vector<Cell>& next) {
       paths_[i][t + 1] = {nxt[i], rot ? next_heads[i] : kEast};
       advance_goal(i, nxt[i]);
     }
+    if (Clock::now() >= stop) return false;
   }
-}
-
-// Last step's plan one step on, everyone waiting at its end for the new last step; empty when some
-// agent is not where that plan put it.
-std::vector<std::vector<Pose>> WindowLns::carried_plan(const WorldView& world) const {
-  const int n = world.num_agents();
-  if (static_cast<int>(last_.size()) != n) return {};
-  for (int i = 0; i < n; ++i)
-    if (last_[i][1] != world.pose(i)) return {};
-  std::vector<std::vector<Pose>> plan(n);
-  for (int i = 0; i < n; ++i) {
-    plan[i].assign(last_[i].begin() + 1, last_[i].end());
-    plan[i].push_back(plan[i].back());
-  }
-  return plan;
+  return true;
 }
 
 // Space-time A* for `agent` around everyone's reservations (its own taken out), minimising cost_of
@@ -289,19 +275,19 @@ StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next)
                                                      [](uint8_t x) { return x != 0; })) ||
                      (world.blocked && !world.blocked->empty());
   if (taken || (budget <= 0 && cfg_.iterations <= 0) || world.num_agents() == 0) return report;
-  const auto stop = t0 + std::chrono::duration_cast<Clock::duration>(
-                             std::chrono::duration<double>(budget * WindowLnsConfig::kStopShare));
+  const auto stop = budget <= 0 ? Clock::time_point::max()
+                                : t0 + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(budget * WindowLnsConfig::kStopShare));
   const auto s0 = Clock::now();
   const int n = world.num_agents();
   rows_.resize(n);
   for (int i = 0; i < n; ++i)
     if (!rows_[i] || rows_[i]->goal() != world.goals[i][0]) rows_[i] = world.dist.row(world.goals[i][0]);
-  std::vector<std::vector<Pose>> kept;  // carried_plan(world) jams: see docs/results.md
-  rollout(world, next);
-  if (!kept.empty()) {
-    long fresh = 0, carried = 0;
-    for (int i = 0; i < n; ++i) fresh += cost_of(world, i, paths_[i]), carried += cost_of(world, i, kept[i]);
-    if (carried < fresh) paths_.swap(kept), ++carried_;
+  if (!rollout(world, next, stop)) {  // no time left to search: the step beneath stands
+    paths_.clear();
+    ++rollouts_cut_;
+    search_s_ += std::chrono::duration<double>(Clock::now() - s0).count();
+    return report;
   }
   reserved_.assign(static_cast<size_t>(cfg_.window + 1) * cells_, -1);
   cost_.assign(n, 0);
@@ -315,7 +301,7 @@ StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next)
   }
   ++steps_searched_;
   for (int k = 0; !delayed_.empty() && (cfg_.iterations <= 0 || k < cfg_.iterations); ++k) {
-    if (budget > 0 && Clock::now() >= stop) break;
+    if (Clock::now() >= stop) break;
     improve_once(world);
   }
   for (int i = 0; i < n; ++i) {

@@ -143,11 +143,25 @@ TEST(WindowLns, StepsOfThePlannerBeneathAreKeptWhenRobotsCannotMove) {
   EXPECT_EQ(planner->stats()["lns_steps"].get<long>(), 0);
 }
 
-TEST(WindowLns, OffByDefaultAndBadValuesAreRefused) {
-  const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+TEST(WindowLns, OnByTheRuleOnlyInTheRotationModelWithRoomToGoRound) {
+  const Grid g = Grid::load(repo("maps/random-32-32-20.map"));  // 819 free cells
   Params none;
-  auto plain = make_planner("gd-rhcr", none, g, 10, 1, ActionModel::kRotation);
-  EXPECT_EQ(dynamic_cast<WindowLns*>(plain.get()), nullptr);
+  auto sparse = make_planner("gd-rhcr", none, g, 200, 1, ActionModel::kRotation);
+  EXPECT_NE(dynamic_cast<WindowLns*>(sparse.get()), nullptr) << "200 agents hold a quarter of the free cells";
+  Params none2;
+  auto dense = make_planner("gd-rhcr", none2, g, 400, 1, ActionModel::kRotation);
+  EXPECT_EQ(dynamic_cast<WindowLns*>(dense.get()), nullptr) << "400 agents hold half of them";
+  Params none3;
+  auto mapf = make_planner("gd-rhcr", none3, g, 200, 1, ActionModel::kMapf);
+  EXPECT_EQ(dynamic_cast<WindowLns*>(mapf.get()), nullptr);
+  Params paper;
+  paper.set("preset", "paper");
+  auto preset = make_planner("gd-rhcr", paper, g, 200, 1, ActionModel::kRotation);
+  EXPECT_EQ(dynamic_cast<WindowLns*>(preset.get()), nullptr) << "the paper's configuration has no LNS";
+}
+
+TEST(WindowLns, BadValuesAreRefused) {
+  const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
   Params bad;
   bad.set("lns-window", "-3");
   EXPECT_THROW(make_planner("gd-rhcr", bad, g, 10, 1, ActionModel::kRotation), ParamError);

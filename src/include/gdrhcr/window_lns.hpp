@@ -20,6 +20,7 @@
 // planner beneath is executed as it is.
 #pragma once
 
+#include <chrono>
 #include <memory>
 #include <random>
 #include <vector>
@@ -63,8 +64,9 @@ class WindowLns : public Planner {
 
  private:
   struct Search;  // the scratch tables of one A*
-  void rollout(const WorldView& world, const std::vector<Cell>& next);
-  std::vector<std::vector<Pose>> carried_plan(const WorldView& world) const;
+  using Clock = std::chrono::steady_clock;
+  // False when `stop` passed before the window was filled.
+  bool rollout(const WorldView& world, const std::vector<Cell>& next, Clock::time_point stop);
   long cost_of(const WorldView& world, int agent, const std::vector<Pose>& path) const;
   void reserve(int agent, const std::vector<Pose>& path, bool on);
   bool replan(const WorldView& world, int agent, std::vector<Pose>& path);
@@ -88,7 +90,7 @@ class WindowLns : public Planner {
   std::unique_ptr<Search> search_;
   std::vector<std::vector<Pose>> last_;  // the plan of the step before
   int last_timestep_ = -2;
-  long steps_searched_ = 0, carried_ = 0, tried_ = 0, kept_ = 0, gained_ = 0, failed_ = 0;
+  long steps_searched_ = 0, rollouts_cut_ = 0, tried_ = 0, kept_ = 0, gained_ = 0, failed_ = 0;
   double search_s_ = 0;
 };
 
