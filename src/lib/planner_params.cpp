@@ -76,9 +76,10 @@ std::string rule_lanes(const std::string& param, const MapFacts& f, const Planne
   return f.model() == ActionModel::kRotation ? "2" : "0";
 }
 // The anytime windowed LNS (window_lns.hpp) in the rotation model where the fleet leaves room to
-// go round: at most a third of the free cells. Denser, single-agent replanning among the others'
-// paths mostly fails, and the plans it does change turn agents back and forth from step to step.
-constexpr double kLnsFleetShare = 1.0 / 3;
+// go round: at most 30% of the free cells. Denser, single-agent replanning among the others' paths
+// mostly fails, and the plans it does change turn agents back and forth from step to step
+// (docs/results.md, "The product default's rules").
+constexpr double kLnsFleetShare = 0.3;
 std::string rule_lns(const std::string&, const MapFacts& f, const PlannerParams&) {
   return f.model() == ActionModel::kRotation && f.fleet_share() <= kLnsFleetShare ? "10" : "0";
 }
@@ -124,7 +125,7 @@ const std::vector<ParamRule>& param_rules() {
        "cells every row and column one can travel along (lanes lines); mapf model: none",
        std::string(kRulesFigure) + "lanes", rule_lanes},
       {"anytime-lns",
-       "rotation model, fleets holding at most a third of the free cells: the rest of the step budget improves a "
+       "rotation model, fleets holding at most 30% of the free cells: the rest of the step budget improves a "
        "10-step joint plan by LNS (lns-window 10); elsewhere off (0)",
        std::string(kRulesFigure) + "anytime-lns", rule_lns},
       {"far-cost", "where the motion forecast runs, conflicts lg-near-steps or more ahead cost 2; else as lg-cost (-1)",

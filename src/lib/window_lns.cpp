@@ -13,6 +13,11 @@ namespace gdrhcr {
 namespace {
 constexpr int kNeighbourRadius = 4;  // agents this many steps from the picked one join it
 constexpr float kTurnTieBreak = 1e-3f;
+// The search ends early once this many rounds over the delayed agents (at least kStaleMin
+// neighbourhoods) in a row lowered nothing: the plan is as good as it gets, and the rest of the
+// budget is left to the machine.
+constexpr long kStaleRounds = 4;
+constexpr long kStaleMin = 100;
 constexpr float kKeepTieBreak = 1e-2f;
 }  // namespace
 
@@ -64,6 +69,7 @@ nlohmann::json WindowLns::stats() const {
   nlohmann::json j = inner_->stats();
   j["lns_steps"] = steps_searched_;
   j["lns_steps_cut"] = rollouts_cut_;
+  j["lns_steps_ended_stale"] = stale_stops_;
   j["lns_neighbourhoods"] = tried_;
   j["lns_kept"] = kept_;
   j["lns_cost_gained"] = gained_;
@@ -81,12 +87,23 @@ std::vector<Cell> WindowLns::planned_path(int agent) const {
 
 long WindowLns::plan_cost() const { return std::accumulate(cost_.begin(), cost_.end(), 0L); }
 
-// The step the agent first stands on its goal, else the window plus the distance from its last pose.
-long WindowLns::cost_of(const WorldView&, int agent, const std::vector<Pose>& path) const {
+// What the distance rows charge for the step from a to b: a forward move what the step costs say
+// (lanes, traffic), a turn or a wait 1.
+int WindowLns::step_cost(const WorldView& world, Pose a, Pose b) {
+  return a.cell != b.cell && world.rotation() ? world.dist.forward_cost(b.cell, b.heading) : 1;
+}
+
+// The steps' costs until the agent first stands on its goal, else until the window's end plus the
+// distance from its last pose.
+long WindowLns::cost_of(const WorldView& world, int agent, const std::vector<Pose>& path) const {
   const DistRow& row = *rows_[agent];
-  for (int t = 0; t <= cfg_.window; ++t)
-    if (path[t].cell == row.goal()) return t;
-  return cfg_.window + row.at(path[cfg_.window].cell, path[cfg_.window].heading);
+  long cost = 0;
+  for (int t = 0; t < cfg_.window; ++t) {
+    if (path[t].cell == row.goal()) return cost;
+    cost += step_cost(world, path[t], path[t + 1]);
+  }
+  if (path[cfg_.window].cell == row.goal()) return cost;
+  return cost + row.at(path[cfg_.window].cell, world.rotation() ? path[cfg_.window].heading : kEast);
 }
 
 void WindowLns::reserve(int agent, const std::vector<Pose>& path, bool on) {
@@ -175,12 +192,14 @@ bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& pat
       const int d = h_of(c2, h2);
       if (d >= kUnreachable) return;
       const int32_t id2 = id_of(t + 1, c2, h2);
-      // A step costs 1; a turn kTurnTieBreak more, so a wait beats a turn and its undoing.
-      float g2 = s.g[id] + (c2 == c && h2 != hd ? kTurnTieBreak : 0.0f);
+      // A step costs what the rows charge for it; a turn kTurnTieBreak more, so a wait beats a turn
+      // and its undoing.
+      float g2 = s.g[id] + static_cast<float>(step_cost(world, {c, hd}, {c2, h2})) +
+                 (c2 == c && h2 != hd ? kTurnTieBreak : 0.0f);
       if (keep && t + 2 <= W && last_[agent][t + 2] != Pose{c2, K > 1 ? h2 : kEast}) g2 += kKeepTieBreak;
       if (s.seen[id2] == s.stamp && s.g[id2] <= g2) return;
       s.seen[id2] = s.stamp, s.parent[id2] = id, s.g[id2] = g2;
-      s.open.push(static_cast<float>(t + 1 + d) + g2, t + 1, id2);
+      s.open.push(g2 + static_cast<float>(d), t + 1, id2);
     };
     if (K > 1) {
       for (Action a : {Action::kForward, Action::kClockwise, Action::kCounterClockwise, Action::kWait}) {
@@ -300,9 +319,17 @@ StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next)
     if (cost_[i] > lower_[i]) delayed_.push_back(i);
   }
   ++steps_searched_;
+  // Until the deadline or the iterations, or until a run of neighbourhoods as long as
+  // kStaleRounds times the delayed agents (at least kStaleMin) has lowered nothing.
+  const long stale_limit = std::max<long>(kStaleMin, kStaleRounds * static_cast<long>(delayed_.size()));
+  long stale = 0;
   for (int k = 0; !delayed_.empty() && (cfg_.iterations <= 0 || k < cfg_.iterations); ++k) {
     if (Clock::now() >= stop) break;
-    improve_once(world);
+    stale = improve_once(world) ? 0 : stale + 1;
+    if (cfg_.iterations <= 0 && stale >= stale_limit) {
+      ++stale_stops_;
+      break;
+    }
   }
   for (int i = 0; i < n; ++i) {
     next[i] = paths_[i][1].cell;

@@ -149,8 +149,8 @@ TEST(WindowLns, OnByTheRuleOnlyInTheRotationModelWithRoomToGoRound) {
   auto sparse = make_planner("gd-rhcr", none, g, 200, 1, ActionModel::kRotation);
   EXPECT_NE(dynamic_cast<WindowLns*>(sparse.get()), nullptr) << "200 agents hold a quarter of the free cells";
   Params none2;
-  auto dense = make_planner("gd-rhcr", none2, g, 400, 1, ActionModel::kRotation);
-  EXPECT_EQ(dynamic_cast<WindowLns*>(dense.get()), nullptr) << "400 agents hold half of them";
+  auto dense = make_planner("gd-rhcr", none2, g, 250, 1, ActionModel::kRotation);
+  EXPECT_EQ(dynamic_cast<WindowLns*>(dense.get()), nullptr) << "250 agents hold 30.5% of them";
   Params none3;
   auto mapf = make_planner("gd-rhcr", none3, g, 200, 1, ActionModel::kMapf);
   EXPECT_EQ(dynamic_cast<WindowLns*>(mapf.get()), nullptr);

@@ -170,6 +170,11 @@ class DistTable {
   int get(Cell goal, Cell from, Heading h) const { return row(goal)->at(from, h); }
   ActionModel action_model() const { return index_->model; }
   const StepCosts& step_costs() const { return costs_; }
+  // What the rows charge for a forward move into free cell c in heading h: 1 without step costs.
+  int forward_cost(Cell c, Heading h) const {
+    if (index_->cost.empty()) return 1;
+    return index_->cost[size_t(index_->slot_of[c]) * kNumHeadings + h];
+  }
 
   // Computes the missing rows among `goals` in parallel (oneTBB), as a batch warm-up. Goals
   // that are not free cells are skipped. Rows are inserted as if queried in the given order.

@@ -8,9 +8,12 @@
 // Every step the planner beneath (GD-RHCR, PIBT) first makes a valid step, as without this layer.
 // PIBT then carries that step on to a joint plan of `window` steps (each step valid: no vertex or
 // edge conflict, every transition one action of the model in force). Each agent's cost in the plan
-// is the step at which it first stands on its goal and can stay there to the window's end, or,
-// when it does not, the window plus its distance (with turns) from where the window leaves it. Then,
-// until the step's deadline: an agent that the plan delays (its cost above its distance) is picked
+// is the cost of its steps until it first stands on its goal (the A* also holds it there to the
+// window's end), or, when it does not, of all its steps plus its distance (with turns) from where
+// the window leaves it. A step costs what the distance rows charge for it: a wait or a turn 1, a
+// forward move 1 plus the step costs in force (one-way lanes, traffic; dist_table.hpp), so the
+// search keeps to the lanes as the rows do. Then,
+// until the step's deadline (or a long run of neighbourhoods that lowered nothing): an agent that the plan delays (its cost above its distance) is picked
 // at random, with the agents nearest it; their paths are taken out and planned again one by one in
 // a random order, each by space-time A* over the model's states around the paths of all the
 // others; the new paths are kept when they cost less in sum, else the old ones come back. The
@@ -68,6 +71,7 @@ class WindowLns : public Planner {
   // False when `stop` passed before the window was filled.
   bool rollout(const WorldView& world, const std::vector<Cell>& next, Clock::time_point stop);
   long cost_of(const WorldView& world, int agent, const std::vector<Pose>& path) const;
+  static int step_cost(const WorldView& world, Pose a, Pose b);
   void reserve(int agent, const std::vector<Pose>& path, bool on);
   bool replan(const WorldView& world, int agent, std::vector<Pose>& path);
   std::vector<int> neighbourhood(const WorldView& world, int seed_agent);
@@ -90,7 +94,7 @@ class WindowLns : public Planner {
   std::unique_ptr<Search> search_;
   std::vector<std::vector<Pose>> last_;  // the plan of the step before
   int last_timestep_ = -2;
-  long steps_searched_ = 0, rollouts_cut_ = 0, tried_ = 0, kept_ = 0, gained_ = 0, failed_ = 0;
+  long steps_searched_ = 0, rollouts_cut_ = 0, stale_stops_ = 0, tried_ = 0, kept_ = 0, gained_ = 0, failed_ = 0;
   double search_s_ = 0;
 };
 
