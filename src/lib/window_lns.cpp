@@ -18,6 +18,7 @@ constexpr float kTurnTieBreak = 1e-3f;
 // budget is left to the machine.
 constexpr long kStaleRounds = 4;
 constexpr long kStaleMin = 100;
+constexpr int kMaxGrowth = 4;  // a stalled search doubles its neighbourhoods up to this many times the size
 constexpr float kKeepTieBreak = 1e-2f;
 }  // namespace
 
@@ -224,12 +225,44 @@ bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& pat
   return true;
 }
 
-// The picked agent and the agents standing nearest it (breadth first, up to kNeighbourRadius steps).
+// The agents in the way of the picked one: along the path it would take alone (down its distance,
+// one action a step), those planned in each of its cells at that step or the next, in path order.
+void WindowLns::add_blockers(const WorldView& world, int seed_agent, std::vector<int>& agents) const {
+  const DistRow& row = *rows_[seed_agent];
+  const bool rot = world.rotation();
+  Pose p = world.pose(seed_agent);
+  auto add = [&](int b) {
+    if (b >= 0 && static_cast<int>(agents.size()) < size_ &&
+        std::find(agents.begin(), agents.end(), b) == agents.end())
+      agents.push_back(b);
+  };
+  for (int t = 0; t < cfg_.window && p.cell != row.goal(); ++t) {
+    Pose best = p;
+    int best_d = rot ? row.at(p.cell, p.heading) : row[p.cell];
+    if (rot) {
+      for (Action a : {Action::kForward, Action::kClockwise, Action::kCounterClockwise}) {
+        const Pose q = apply_action(grid_, p, a);
+        if (q.cell != kNoCell && row.at(q.cell, q.heading) < best_d) best = q, best_d = row.at(q.cell, q.heading);
+      }
+    } else {
+      for (Cell c2 : grid_.neighbours(p.cell))
+        if (row[c2] < best_d) best = {c2, kEast}, best_d = row[c2];
+    }
+    if (best == p) break;
+    p = best;
+    add(at(t + 1, p.cell));
+    if (t + 2 <= cfg_.window) add(at(t + 2, p.cell));
+  }
+}
+
+// The picked agent, then (every other neighbourhood) the agents in its way, then the agents standing
+// nearest it (breadth first, up to kNeighbourRadius steps).
 std::vector<int> WindowLns::neighbourhood(const WorldView& world, int seed_agent) {
   std::vector<int> agents{seed_agent};
+  if (rng_() & 1) add_blockers(world, seed_agent, agents);
   std::vector<Cell> frontier{world.positions[seed_agent]}, next_frontier;
   std::vector<Cell> visited{world.positions[seed_agent]};
-  for (int r = 0; r < kNeighbourRadius && static_cast<int>(agents.size()) < cfg_.neighbourhood; ++r) {
+  for (int r = 0; r < kNeighbourRadius && static_cast<int>(agents.size()) < size_; ++r) {
     next_frontier.clear();
     for (Cell c : frontier)
       for (Cell c2 : grid_.neighbours(c)) {
@@ -240,7 +273,9 @@ std::vector<int> WindowLns::neighbourhood(const WorldView& world, int seed_agent
     std::shuffle(next_frontier.begin(), next_frontier.end(), rng_);
     for (Cell c2 : next_frontier) {
       const int b = at(0, c2);
-      if (b >= 0 && static_cast<int>(agents.size()) < cfg_.neighbourhood) agents.push_back(b);
+      if (b >= 0 && static_cast<int>(agents.size()) < size_ &&
+          std::find(agents.begin(), agents.end(), b) == agents.end())
+        agents.push_back(b);
     }
     frontier.swap(next_frontier);
   }
@@ -321,12 +356,18 @@ StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next)
   ++steps_searched_;
   // Until the deadline or the iterations, or until a run of neighbourhoods as long as
   // kStaleRounds times the delayed agents (at least kStaleMin) has lowered nothing.
+  size_ = cfg_.neighbourhood;
   const long stale_limit = std::max<long>(kStaleMin, kStaleRounds * static_cast<long>(delayed_.size()));
   long stale = 0;
   for (int k = 0; !delayed_.empty() && (cfg_.iterations <= 0 || k < cfg_.iterations); ++k) {
     if (Clock::now() >= stop) break;
     stale = improve_once(world) ? 0 : stale + 1;
     if (cfg_.iterations <= 0 && stale >= stale_limit) {
+      if (size_ < kMaxGrowth * cfg_.neighbourhood) {  // larger neighbourhoods before giving up
+        size_ *= 2;
+        stale = 0;
+        continue;
+      }
       ++stale_stops_;
       break;
     }

@@ -13,10 +13,12 @@
 // the window leaves it. A step costs what the distance rows charge for it: a wait or a turn 1, a
 // forward move 1 plus the step costs in force (one-way lanes, traffic; dist_table.hpp), so the
 // search keeps to the lanes as the rows do. Then,
-// until the step's deadline (or a long run of neighbourhoods that lowered nothing): an agent that the plan delays (its cost above its distance) is picked
-// at random, with the agents nearest it; their paths are taken out and planned again one by one in
-// a random order, each by space-time A* over the model's states around the paths of all the
-// others; the new paths are kept when they cost less in sum, else the old ones come back. The
+// until the step's deadline: an agent that the plan delays (its cost above its distance) is picked
+// at random, with (every other time) the agents in the way of the path it would take alone, then
+// the agents standing nearest it; their paths are taken out and planned again one by one in a
+// random order, each by space-time A* over the model's states around the paths of all the others;
+// the new paths are kept when they cost less in sum, else the old ones come back. A search that a
+// long run of neighbourhoods has not improved doubles their size, up to four times, then stops. The
 // first step of the final plan is executed. Only plans free of conflicts are ever held, so what is
 // executed is valid whenever the search stops. Robots that cannot move and blocked cells (the ROS
 // node's offline robots and late robots' cells) turn the search off for that step: the step of the
@@ -75,6 +77,7 @@ class WindowLns : public Planner {
   void reserve(int agent, const std::vector<Pose>& path, bool on);
   bool replan(const WorldView& world, int agent, std::vector<Pose>& path);
   std::vector<int> neighbourhood(const WorldView& world, int seed_agent);
+  void add_blockers(const WorldView& world, int seed_agent, std::vector<int>& agents) const;
   bool improve_once(const WorldView& world);
   int& at(int t, Cell c) { return reserved_[static_cast<size_t>(t) * cells_ + c]; }
   int at(int t, Cell c) const { return reserved_[static_cast<size_t>(t) * cells_ + c]; }
@@ -85,6 +88,7 @@ class WindowLns : public Planner {
   ActionModel model_;
   PibtStep pibt_;
   std::mt19937_64 rng_;
+  int size_ = 0;  // agents per neighbourhood in this step's search
   int cells_;
   std::vector<std::vector<Pose>> paths_;
   std::vector<long> cost_, lower_;  // per agent: its cost in the plan, its distance (no plan costs less)
