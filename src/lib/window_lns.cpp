@@ -86,6 +86,11 @@ std::vector<Cell> WindowLns::planned_path(int agent) const {
   return cells;
 }
 
+Cell WindowLns::intended_next(int agent, Cell at) const {
+  if (paths_.empty()) return inner_->intended_next(agent, at);
+  return cell_after_step(planned_path(agent), at);
+}
+
 long WindowLns::plan_cost() const { return std::accumulate(cost_.begin(), cost_.end(), 0L); }
 
 // What the distance rows charge for the step from a to b: a forward move what the step costs say

@@ -143,6 +143,55 @@ TEST(WindowLns, StepsOfThePlannerBeneathAreKeptWhenRobotsCannotMove) {
   EXPECT_EQ(planner->stats()["lns_steps"].get<long>(), 0);
 }
 
+// Without a budget the search does not run, and the wrapper answers for the planner beneath
+// exactly: its step, its planned paths and the cell it means each agent to enter next (GD-RHCR's
+// from its guidance; the ROS executor's catch-up reads it).
+TEST(WindowLns, WithoutABudgetItIsThePlannerBeneath) {
+  const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+  const int n = 100;
+  for (ActionModel model : {ActionModel::kRotation, ActionModel::kMapf}) {
+    SCOPED_TRACE(action_model_name(model));
+    DistTable dist(g, model);
+    RandomNavigationStream tasks(g, 4);
+    std::vector<Cell> pos = random_starts(g, n, 4);
+    std::vector<Heading> heads(n, kEast), next_heads(n, kEast), plain_heads(n, kEast);
+    std::vector<std::vector<Cell>> goals(n);
+    for (int i = 0; i < n; ++i) goals[i] = {tasks.next_goal(i, pos[i])};
+    Params with, without;
+    with.set("lns-window", "10");
+    without.set("lns-window", "0");
+    auto wrapped = make_planner("gd-rhcr", with, g, n, 4, model);
+    auto plain = make_planner("gd-rhcr", without, g, n, 4, model);
+    ASSERT_NE(dynamic_cast<WindowLns*>(wrapped.get()), nullptr);
+    int compared = 0;
+    for (int step = 0; step < 15; ++step) {
+      WorldView a{g, dist, step, pos, goals}, b{g, dist, step, pos, goals};
+      a.action_model = b.action_model = model;
+      if (model == ActionModel::kRotation) {
+        a.headings = b.headings = &heads;
+        a.next_headings = &next_heads, b.next_headings = &plain_heads;
+      }
+      std::vector<Cell> na(n), nb(n);
+      wrapped->plan_step(a, na);
+      plain->plan_step(b, nb);
+      ASSERT_EQ(na, nb);
+      for (int i = 0; i < n; ++i) {
+        ASSERT_EQ(wrapped->planned_path(i), plain->planned_path(i));
+        ASSERT_EQ(wrapped->intended_next(i, na[i]), plain->intended_next(i, na[i]));
+        compared += plain->intended_next(i, na[i]) != kNoCell;
+      }
+      pos = na;
+      if (model == ActionModel::kRotation) {
+        ASSERT_EQ(next_heads, plain_heads);
+        heads = next_heads;
+      }
+      for (int i = 0; i < n; ++i)
+        if (pos[i] == goals[i][0]) goals[i] = {tasks.next_goal(i, pos[i])};
+    }
+    EXPECT_GT(compared, 0) << "GD-RHCR named no next cell at all";
+  }
+}
+
 TEST(WindowLns, OnByTheRuleOnlyInTheRotationModelWithRoomToGoRound) {
   const Grid g = Grid::load(repo("maps/random-32-32-20.map"));  // 819 free cells
   Params none;

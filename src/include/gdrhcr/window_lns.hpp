@@ -60,7 +60,10 @@ class WindowLns : public Planner {
   // kept, the plan cost the search took off, and the time spent.
   nlohmann::json stats() const override;
   std::vector<PlannerGroup> groups() const override { return inner_->groups(); }
+  // The last step's joint plan when the search ran; else the planner beneath's (GD-RHCR answers
+  // from its guidance paths, which the ROS executor's catch-up reads).
   std::vector<Cell> planned_path(int agent) const override;
+  Cell intended_next(int agent, Cell at) const override;
 
   // The joint plan of the last step, per agent: poses at t = 0 .. window (empty when the search
   // did not run), and its summed cost (as above). For tests.
