@@ -43,11 +43,10 @@ struct WindowLns::Search {
 };
 
 WindowLns::WindowLns(std::unique_ptr<Planner> inner, const Grid& grid, int num_agents, WindowLnsConfig config,
-                     PibtOptions rollout, ActionModel model)
+                     PibtOptions rollout)
     : inner_(std::move(inner)),
       grid_(grid),
       cfg_(config),
-      model_(model),
       pibt_(grid, num_agents, config.seed ^ 0x5eedULL, rollout),
       rng_(config.seed),
       cells_(grid.num_cells()),
@@ -151,6 +150,11 @@ bool WindowLns::rollout(const WorldView& world, const std::vector<Cell>& next, C
   return true;
 }
 
+Pose WindowLns::pose_of(int32_t id, size_t layer, int k) {
+  const size_t rest = id % layer;
+  return {static_cast<Cell>(rest / k), static_cast<Heading>(k > 1 ? rest % k : kEast)};
+}
+
 // Space-time A* for `agent` around everyone's reservations (its own taken out), minimising cost_of
 // with the goal held to the window's end; false when none is found within kMaxExpansions.
 bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& path) {
@@ -182,9 +186,7 @@ bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& pat
     s.closed[id] = s.stamp;
     ++expansions;
     const int t = static_cast<int>(id / layer);
-    const size_t rest = id % layer;
-    const Cell c = static_cast<Cell>(rest / K);
-    const Heading hd = static_cast<Heading>(K > 1 ? rest % K : kEast);
+    const auto [c, hd] = pose_of(id, layer, K);
     if ((c == goal && free_to_end(t, c)) || t == W) {
       found = id;
       break;
@@ -219,14 +221,8 @@ bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& pat
   }
   if (found < 0) return false;
   int t = static_cast<int>(found / layer);
-  for (int u = t + 1; u <= W; ++u) {  // holds the goal, or t == W
-    const size_t rest = found % layer;
-    path[u] = {static_cast<Cell>(rest / K), static_cast<Heading>(K > 1 ? rest % K : kEast)};
-  }
-  for (int32_t id = found; id >= 0; id = s.parent[id], --t) {
-    const size_t rest = id % layer;
-    path[t] = {static_cast<Cell>(rest / K), static_cast<Heading>(K > 1 ? rest % K : kEast)};
-  }
+  for (int u = t + 1; u <= W; ++u) path[u] = pose_of(found, layer, K);  // holds the goal, or t == W
+  for (int32_t id = found; id >= 0; id = s.parent[id], --t) path[t] = pose_of(id, layer, K);
   return true;
 }
 
@@ -302,16 +298,18 @@ bool WindowLns::improve_once(const WorldView& world) {
   ++tried_;
   long before = 0, after = 0;
   std::vector<std::vector<Pose>> old;
+  std::vector<long> fresh;
   for (int a : agents) before += cost_[a], old.push_back(paths_[a]), reserve(a, paths_[a], false);
   size_t done = 0;
   for (; done < agents.size(); ++done) {
     const int a = agents[done];
     if (!replan(world, a, paths_[a])) break;
     reserve(a, paths_[a], true);
-    after += cost_of(world, a, paths_[a]);
+    fresh.push_back(cost_of(world, a, paths_[a]));
+    after += fresh.back();
   }
   if (done == agents.size() && after < before) {
-    for (int a : agents) cost_[a] = cost_of(world, a, paths_[a]);
+    for (size_t k = 0; k < agents.size(); ++k) cost_[agents[k]] = fresh[k];
     ++kept_, gained_ += before - after;
     return true;
   }

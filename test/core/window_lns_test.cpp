@@ -26,8 +26,8 @@ Params lns_params(int window, int iterations) {
 
 // Checks the plan the planner holds after a step of `world`: it starts where the agents stand,
 // every transition is one action of the model, no two agents share a cell at a time or swap cells,
-// and its cost is the sum of each agent's (the step it first stands on its goal, else the window
-// plus its distance from where the window leaves it).
+// and its cost is the sum of each agent's (here, without step costs, every step costs 1: the step it
+// first stands on its goal, else the window plus its distance from where the window leaves it).
 void check_plan(const WindowLns& lns, const WorldView& world, int window) {
   const auto& plan = lns.plan();
   ASSERT_EQ(static_cast<int>(plan.size()), world.num_agents());

@@ -49,8 +49,9 @@ struct WindowLnsConfig {
 class WindowLns : public Planner {
  public:
   // `rollout` are the options of the PIBT that carries the first step on (its own instance).
+  // It plans in whichever action model each step's world is in, as the planner beneath does.
   WindowLns(std::unique_ptr<Planner> inner, const Grid& grid, int num_agents, WindowLnsConfig config,
-            PibtOptions rollout, ActionModel model);
+            PibtOptions rollout);
   ~WindowLns() override;
   std::string name() const override { return inner_->name(); }
   StepReport plan_step(const WorldView& world, std::vector<Cell>& next) override;
@@ -75,6 +76,8 @@ class WindowLns : public Planner {
   // False when `stop` passed before the window was filled.
   bool rollout(const WorldView& world, const std::vector<Cell>& next, Clock::time_point stop);
   long cost_of(const WorldView& world, int agent, const std::vector<Pose>& path) const;
+  // The pose of A* state `id` (layer = states per timestep, k = headings per cell: 4, or 1 in mapf).
+  static Pose pose_of(int32_t id, size_t layer, int k);
   static int step_cost(const WorldView& world, Pose a, Pose b);
   void reserve(int agent, const std::vector<Pose>& path, bool on);
   bool replan(const WorldView& world, int agent, std::vector<Pose>& path);
@@ -87,7 +90,6 @@ class WindowLns : public Planner {
   std::unique_ptr<Planner> inner_;
   const Grid& grid_;
   WindowLnsConfig cfg_;
-  ActionModel model_;
   PibtStep pibt_;
   std::mt19937_64 rng_;
   int size_ = 0;  // agents per neighbourhood in this step's search
