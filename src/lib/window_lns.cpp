@@ -20,6 +20,7 @@ constexpr long kStaleRounds = 4;
 constexpr long kStaleMin = 100;
 constexpr int kMaxGrowth = 4;  // a stalled search doubles its neighbourhoods up to this many times the size
 constexpr float kKeepTieBreak = 1e-2f;
+constexpr float kFreeMove = 1e-3f;  // a move or turn after the goal
 }  // namespace
 
 // One space-time A*'s scratch: per state (t, cell, heading) a stamp and a parent, reset in O(1)
@@ -155,8 +156,10 @@ Pose WindowLns::pose_of(int32_t id, size_t layer, int k) {
   return {static_cast<Cell>(rest / k), static_cast<Heading>(k > 1 ? rest % k : kEast)};
 }
 
-// Space-time A* for `agent` around everyone's reservations (its own taken out), minimising cost_of
-// with the goal held to the window's end; false when none is found within kMaxExpansions.
+// Space-time A* for `agent` around everyone's reservations (its own taken out), minimising cost_of.
+// A state is (t, reached, cell, heading): once the agent has stood on its goal its steps cost
+// nothing (a move kFreeMove, so it stays unless it is in the way), as it gets its next errand
+// there. False when no path is found within kMaxExpansions.
 bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& path) {
   const DistRow& row = *rows_[agent];
   const Cell goal = row.goal();
@@ -164,20 +167,18 @@ bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& pat
   const int K = world.rotation() ? kNumHeadings : 1;
   const size_t layer = static_cast<size_t>(cells_) * K;
   Search& s = *search_;
-  s.begin(layer * (W + 1));
-  auto id_of = [&](int t, Cell c, Heading h) { return static_cast<int32_t>(t * layer + static_cast<size_t>(c) * K + (K > 1 ? h : 0)); };
-  auto h_of = [&](Cell c, Heading h) { return K > 1 ? row.at(c, h) : row[c]; };
-  auto free_to_end = [&](int t, Cell c) {
-    for (int u = t + 1; u <= W; ++u)
-      if (at(u, c) >= 0) return false;
-    return true;
+  s.begin(2 * layer * (W + 1));
+  auto id_of = [&](int t, int r, Cell c, Heading h) {
+    return static_cast<int32_t>((2 * t + r) * layer + static_cast<size_t>(c) * K + (K > 1 ? h : 0));
   };
+  auto h_of = [&](Cell c, Heading h) { return K > 1 ? row.at(c, h) : row[c]; };
   const Pose start = path[0];
   // Among equally cheap paths, the one the last step planned (carried one step on).
   const bool keep = static_cast<int>(last_.size()) > agent && last_[agent][1] == start;
-  const int32_t id0 = id_of(0, start.cell, start.heading);
+  const int r0 = start.cell == goal ? 1 : 0;
+  const int32_t id0 = id_of(0, r0, start.cell, start.heading);
   s.seen[id0] = s.stamp, s.parent[id0] = -1, s.g[id0] = 0;
-  s.open.push(static_cast<float>(h_of(start.cell, start.heading)), 0, id0);
+  s.open.push(r0 ? 0.0f : static_cast<float>(h_of(start.cell, start.heading)), 0, id0);
   int expansions = 0;
   int32_t found = -1;
   while (!s.open.empty() && expansions < WindowLnsConfig::kMaxExpansions) {
@@ -185,9 +186,10 @@ bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& pat
     if (s.closed[id] == s.stamp) continue;
     s.closed[id] = s.stamp;
     ++expansions;
-    const int t = static_cast<int>(id / layer);
+    const int t = static_cast<int>(id / (2 * layer));
+    const int r = static_cast<int>(id / layer) & 1;
     const auto [c, hd] = pose_of(id, layer, K);
-    if ((c == goal && free_to_end(t, c)) || t == W) {
+    if (t == W) {
       found = id;
       break;
     }
@@ -197,13 +199,16 @@ bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& pat
         const int b = at(t, c2);
         if (b >= 0 && at(t + 1, c) == b) return;
       }
-      const int d = h_of(c2, h2);
+      const int r2 = r || c2 == goal;
+      const int d = r2 ? 0 : h_of(c2, h2);
       if (d >= kUnreachable) return;
-      const int32_t id2 = id_of(t + 1, c2, h2);
-      // A step costs what the rows charge for it; a turn kTurnTieBreak more, so a wait beats a turn
-      // and its undoing.
-      float g2 = s.g[id] + static_cast<float>(step_cost(world, {c, hd}, {c2, h2})) +
-                 (c2 == c && h2 != hd ? kTurnTieBreak : 0.0f);
+      const int32_t id2 = id_of(t + 1, r2, c2, h2);
+      // Before the goal a step costs what the rows charge for it, a turn kTurnTieBreak more (so a
+      // wait beats a turn and its undoing); after it, only a move or turn, kFreeMove.
+      const bool still = c2 == c && h2 == hd;
+      float g2 = s.g[id] + (r ? (still ? 0.0f : kFreeMove)
+                              : static_cast<float>(step_cost(world, {c, hd}, {c2, h2})) +
+                                    (c2 == c && h2 != hd ? kTurnTieBreak : 0.0f));
       if (keep && t + 2 <= W && last_[agent][t + 2] != Pose{c2, K > 1 ? h2 : kEast}) g2 += kKeepTieBreak;
       if (s.seen[id2] == s.stamp && s.g[id2] <= g2) return;
       s.seen[id2] = s.stamp, s.parent[id2] = id, s.g[id2] = g2;
@@ -220,8 +225,7 @@ bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& pat
     }
   }
   if (found < 0) return false;
-  int t = static_cast<int>(found / layer);
-  for (int u = t + 1; u <= W; ++u) path[u] = pose_of(found, layer, K);  // holds the goal, or t == W
+  int t = W;
   for (int32_t id = found; id >= 0; id = s.parent[id], --t) path[t] = pose_of(id, layer, K);
   return true;
 }
@@ -283,6 +287,8 @@ std::vector<int> WindowLns::neighbourhood(const WorldView& world, int seed_agent
   return agents;
 }
 
+// One neighbourhood: its paths planned again, and kept when they cost no more in sum. True when
+// they cost less.
 bool WindowLns::improve_once(const WorldView& world) {
   // The picked agent: of two delayed agents drawn at random, the one the plan delays more.
   int pick = -1;
@@ -308,10 +314,10 @@ bool WindowLns::improve_once(const WorldView& world) {
     fresh.push_back(cost_of(world, a, paths_[a]));
     after += fresh.back();
   }
-  if (done == agents.size() && after < before) {
+  if (done == agents.size() && after <= before) {  // an equal plan is kept too: the search drifts on
     for (size_t k = 0; k < agents.size(); ++k) cost_[agents[k]] = fresh[k];
     ++kept_, gained_ += before - after;
-    return true;
+    return after < before;
   }
   if (done < agents.size()) ++failed_;
   for (size_t k = 0; k < done; ++k) reserve(agents[k], paths_[agents[k]], false);

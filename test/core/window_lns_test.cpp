@@ -101,6 +101,29 @@ TEST(WindowLns, HoldsAConflictFreePlanOfTheModelsActionsAndLowersItsCost) {
   }
 }
 
+// An agent's errand is done the first time it stands on its goal, and it may leave the goal after
+// that (it gets its next errand there): here agent 0 reaches its goal, at the mouth of a pocket, at
+// once and steps into the pocket so that agent 1 can pass. Holding the goal to the window's end
+// would leave agent 1 no way through.
+TEST(WindowLns, AnAgentOnItsGoalMakesWay) {
+  const Grid g = Grid::from_rows({".....", "@@.@@"});
+  DistTable dist(g, ActionModel::kMapf);
+  const int window = 8;
+  std::vector<Cell> pos{g.cell(1, 0), g.cell(4, 0)};
+  std::vector<std::vector<Cell>> goals{{g.cell(2, 0)}, {g.cell(0, 0)}};
+  Params params = lns_params(window, 200);
+  auto planner = make_planner("gd-rhcr", params, g, 2, 1, ActionModel::kMapf);
+  auto& lns = dynamic_cast<WindowLns&>(*planner);
+  WorldView world{g, dist, 0, pos, goals};
+  std::vector<Cell> next(2);
+  planner->plan_step(world, next);
+  check_plan(lns, world, window);
+  EXPECT_EQ(lns.plan_cost(), 1 + 4) << "agent 0 arrives at step 1, agent 1 at step 4";
+  EXPECT_EQ(lns.plan()[0][1].cell, g.cell(2, 0));
+  EXPECT_EQ(lns.plan()[0][2].cell, g.cell(2, 1)) << "agent 0 steps into the pocket";
+  EXPECT_EQ(lns.plan()[1][4].cell, g.cell(0, 0));
+}
+
 TEST(WindowLns, RunsAreValidAndReachGoalsInBothModels) {
   for (ActionModel model : {ActionModel::kRotation, ActionModel::kMapf}) {
     for (const char* map : {"random-32-32-20.map", "warehouse-10-20-10-2-1.map", "room-32-32-4.map"}) {
