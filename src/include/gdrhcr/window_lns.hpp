@@ -10,15 +10,16 @@
 // edge conflict, every transition one action of the model in force). Each agent's cost in the plan
 // is the cost of its steps until it first stands on its goal (its errand is then done, and its later
 // steps cost nothing: it stays there, or makes way for others), or, when it does not reach it, of
-// all its steps plus its distance (with turns) from where the window leaves it. A step costs what the distance rows charge for it: a wait or a turn 1, a
-// forward move 1 plus the step costs in force (one-way lanes, traffic; dist_table.hpp), so the
-// search keeps to the lanes as the rows do. Then, until the step's deadline: an agent that the plan
-// delays (its cost above its distance) is picked at random, with (every other time) the agents in
-// the way of the path it would take alone, then the agents standing nearest it; their paths are
-// taken out and planned again one by one in a random order, each by space-time A* over the model's
-// states around the paths of all the others; the new paths are kept when they cost no more in sum
-// (so the search drifts across equal plans), else the old ones come back. A search that a long run
-// of neighbourhoods has not lowered doubles their size, up to four times the first, then stops. The first step of the final plan is executed.
+// all its steps plus its distance (with turns) from where the window leaves it. A step costs what
+// the distance rows charge for it: a wait or a turn 1, a forward move 1 plus the step costs in force
+// (one-way lanes, traffic; dist_table.hpp), so the search keeps to the lanes as the rows do.
+// Then, until the step's deadline: an agent that the plan delays (its cost above its distance) is
+// picked at random, with (every other time) the agents in the way of the path it would take alone,
+// then the agents standing nearest it. Their paths are taken out and planned again one by one in a
+// random order, each by space-time A* over the model's states around the paths of all the others;
+// the new paths are kept when they cost no more in sum (so the search drifts across equal plans),
+// else the old ones come back. A search that a long run of neighbourhoods has not lowered doubles their size, up to four
+// times the first, then stops. The first step of the final plan is executed.
 // Only plans free of conflicts are ever held, so what is executed is valid whenever the search
 // stops. Robots that cannot move and blocked cells (the ROS node's offline robots and late robots'
 // cells) turn the search off for that step: the step of the planner beneath is executed as it is.
