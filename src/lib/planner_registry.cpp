@@ -87,7 +87,7 @@ std::unique_ptr<Planner> make_gd_rhcr(const PlannerParams& v, const Grid& grid, 
   rollout.rotation = PibtOptions::Rotation::kCells;
   rollout.rotation_commit = false;
   rollout.rotation_starts = 1;
-  return std::make_unique<WindowLns>(std::move(planner), grid, n, c, rollout);
+  return std::make_unique<WindowLns>(std::move(planner), grid, n, c, rollout, m);
 }
 
 using Factory = std::unique_ptr<Planner> (*)(const PlannerParams&, const Grid&, int, uint64_t, ActionModel);

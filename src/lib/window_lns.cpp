@@ -32,8 +32,8 @@ struct WindowLns::Search {
   uint32_t stamp = 0;
   OpenList open;
   void begin(size_t states) {
-    if (seen.size() != states)
-      seen.assign(states, 0), closed.assign(states, 0), parent.assign(states, -1), g.assign(states, 0);
+    if (seen.size() < states)
+      seen.assign(states, 0), closed.assign(states, 0), parent.assign(states, -1), g.assign(states, 0), stamp = 0;
     if (++stamp == 0) {
       std::fill(seen.begin(), seen.end(), 0);
       std::fill(closed.begin(), closed.end(), 0);
@@ -44,7 +44,7 @@ struct WindowLns::Search {
 };
 
 WindowLns::WindowLns(std::unique_ptr<Planner> inner, const Grid& grid, int num_agents, WindowLnsConfig config,
-                     PibtOptions rollout)
+                     PibtOptions rollout, ActionModel model)
     : inner_(std::move(inner)),
       grid_(grid),
       cfg_(config),
@@ -54,6 +54,13 @@ WindowLns::WindowLns(std::unique_ptr<Planner> inner, const Grid& grid, int num_a
       search_(std::make_unique<Search>()) {
   if (cfg_.window < 1) throw std::invalid_argument("window LNS: the window must be at least one step");
   if (cfg_.neighbourhood < 1) throw std::invalid_argument("window LNS: a neighbourhood needs at least one agent");
+  search_->begin(states(model));  // now, not in the first step's budget (about 100 MB for 70,000 cells)
+}
+
+// The A*'s states: (t, reached, cell, heading).
+size_t WindowLns::states(ActionModel model) const {
+  const size_t k = model == ActionModel::kRotation ? kNumHeadings : 1;
+  return 2 * static_cast<size_t>(cells_) * k * (cfg_.window + 1);
 }
 
 WindowLns::~WindowLns() = default;
@@ -167,7 +174,7 @@ bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& pat
   const int K = world.rotation() ? kNumHeadings : 1;
   const size_t layer = static_cast<size_t>(cells_) * K;
   Search& s = *search_;
-  s.begin(2 * layer * (W + 1));
+  s.begin(states(world.action_model));
   auto id_of = [&](int t, int r, Cell c, Heading h) {
     return static_cast<int32_t>((2 * t + r) * layer + static_cast<size_t>(c) * K + (K > 1 ? h : 0));
   };

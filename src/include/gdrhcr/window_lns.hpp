@@ -50,9 +50,10 @@ struct WindowLnsConfig {
 class WindowLns : public Planner {
  public:
   // `rollout` are the options of the PIBT that carries the first step on (its own instance).
-  // It plans in whichever action model each step's world is in, as the planner beneath does.
+  // It plans in whichever action model each step's world is in, as the planner beneath does; the
+  // search's tables are made for `model` at once.
   WindowLns(std::unique_ptr<Planner> inner, const Grid& grid, int num_agents, WindowLnsConfig config,
-            PibtOptions rollout);
+            PibtOptions rollout, ActionModel model = ActionModel::kMapf);
   ~WindowLns() override;
   std::string name() const override { return inner_->name(); }
   StepReport plan_step(const WorldView& world, std::vector<Cell>& next) override;
@@ -79,6 +80,7 @@ class WindowLns : public Planner {
   long cost_of(const WorldView& world, int agent, const std::vector<Pose>& path) const;
   // The pose of A* state `id` (layer = states per timestep, k = headings per cell: 4, or 1 in mapf).
   static Pose pose_of(int32_t id, size_t layer, int k);
+  size_t states(ActionModel model) const;
   static int step_cost(const WorldView& world, Pose a, Pose b);
   void reserve(int agent, const std::vector<Pose>& path, bool on);
   bool replan(const WorldView& world, int agent, std::vector<Pose>& path);
