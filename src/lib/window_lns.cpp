@@ -23,8 +23,8 @@ constexpr float kKeepTieBreak = 1e-2f;
 constexpr float kFreeMove = 1e-3f;  // a move or turn after the goal
 }  // namespace
 
-// One space-time A*'s scratch: per state (t, cell, heading) a stamp and a parent, reset in O(1)
-// by bumping the stamp.
+// One space-time A*'s scratch: per state (t, reached, cell, heading) a stamp and a parent, reset in
+// O(1) by bumping the stamp.
 struct WindowLns::Search {
   std::vector<uint32_t> seen, closed;
   std::vector<int32_t> parent;

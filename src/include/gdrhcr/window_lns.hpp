@@ -53,7 +53,7 @@ class WindowLns : public Planner {
   // It plans in whichever action model each step's world is in, as the planner beneath does; the
   // search's tables are made for `model` at once.
   WindowLns(std::unique_ptr<Planner> inner, const Grid& grid, int num_agents, WindowLnsConfig config,
-            PibtOptions rollout, ActionModel model = ActionModel::kMapf);
+            PibtOptions rollout, ActionModel model);
   ~WindowLns() override;
   std::string name() const override { return inner_->name(); }
   StepReport plan_step(const WorldView& world, std::vector<Cell>& next) override;
