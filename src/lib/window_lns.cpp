@@ -54,13 +54,15 @@ WindowLns::WindowLns(std::unique_ptr<Planner> inner, const Grid& grid, int num_a
       search_(std::make_unique<Search>()) {
   if (cfg_.window < 1) throw std::invalid_argument("window LNS: the window must be at least one step");
   if (cfg_.neighbourhood < 1) throw std::invalid_argument("window LNS: a neighbourhood needs at least one agent");
-  search_->begin(states(model));  // now, not in the first step's budget (about 100 MB for 70,000 cells)
+  search_->begin(states(model));  // now, not in the first step's budget
 }
 
-// The A*'s states: (t, reached, cell, heading).
+// The A*'s states: (t, reached, cell, heading), the cells those of the box of side 2 x window + 1
+// around the agent's start (it cannot leave the box in the window), whatever the map's size.
 size_t WindowLns::states(ActionModel model) const {
   const size_t k = model == ActionModel::kRotation ? kNumHeadings : 1;
-  return 2 * static_cast<size_t>(cells_) * k * (cfg_.window + 1);
+  const size_t side = 2 * static_cast<size_t>(cfg_.window) + 1;
+  return 2 * side * side * k * (cfg_.window + 1);
 }
 
 WindowLns::~WindowLns() = default;
@@ -158,11 +160,6 @@ bool WindowLns::rollout(const WorldView& world, const std::vector<Cell>& next, C
   return true;
 }
 
-Pose WindowLns::pose_of(int32_t id, size_t layer, int k) {
-  const size_t rest = id % layer;
-  return {static_cast<Cell>(rest / k), static_cast<Heading>(k > 1 ? rest % k : kEast)};
-}
-
 // Space-time A* for `agent` around everyone's reservations (its own taken out), minimising cost_of.
 // A state is (t, reached, cell, heading): once the agent has stood on its goal its steps cost
 // nothing (a move kFreeMove, so it stays unless it is in the way), as it gets its next errand
@@ -172,14 +169,22 @@ bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& pat
   const Cell goal = row.goal();
   const int W = cfg_.window;
   const int K = world.rotation() ? kNumHeadings : 1;
-  const size_t layer = static_cast<size_t>(cells_) * K;
+  const Pose start = path[0];
+  // A state's cell is numbered in the box of side 2W + 1 around the start: the agent cannot leave it.
+  const int side = 2 * W + 1, x0 = grid_.x_of(start.cell) - W, y0 = grid_.y_of(start.cell) - W;
+  const size_t layer = static_cast<size_t>(side) * side * K;
   Search& s = *search_;
   s.begin(states(world.action_model));
   auto id_of = [&](int t, int r, Cell c, Heading h) {
-    return static_cast<int32_t>((2 * t + r) * layer + static_cast<size_t>(c) * K + (K > 1 ? h : 0));
+    const size_t local = static_cast<size_t>(grid_.y_of(c) - y0) * side + (grid_.x_of(c) - x0);
+    return static_cast<int32_t>((2 * t + r) * layer + local * K + (K > 1 ? h : 0));
+  };
+  auto pose_of = [&](int32_t id) -> Pose {
+    const size_t local = (id % layer) / K;
+    return {grid_.cell(x0 + static_cast<int>(local % side), y0 + static_cast<int>(local / side)),
+            static_cast<Heading>(K > 1 ? id % K : kEast)};
   };
   auto h_of = [&](Cell c, Heading h) { return K > 1 ? row.at(c, h) : row[c]; };
-  const Pose start = path[0];
   // Among equally cheap paths, the one the last step planned (carried one step on).
   const bool keep = static_cast<int>(last_.size()) > agent && last_[agent][1] == start;
   const int r0 = start.cell == goal ? 1 : 0;
@@ -195,7 +200,7 @@ bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& pat
     ++expansions;
     const int t = static_cast<int>(id / (2 * layer));
     const int r = static_cast<int>(id / layer) & 1;
-    const auto [c, hd] = pose_of(id, layer, K);
+    const auto [c, hd] = pose_of(id);
     if (t == W) {
       found = id;
       break;
@@ -233,7 +238,7 @@ bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& pat
   }
   if (found < 0) return false;
   int t = W;
-  for (int32_t id = found; id >= 0; id = s.parent[id], --t) path[t] = pose_of(id, layer, K);
+  for (int32_t id = found; id >= 0; id = s.parent[id], --t) path[t] = pose_of(id);
   return true;
 }
 

@@ -78,10 +78,7 @@ class WindowLns : public Planner {
   // False when `stop` passed before the window was filled.
   bool rollout(const WorldView& world, const std::vector<Cell>& next, Clock::time_point stop);
   long cost_of(const WorldView& world, int agent, const std::vector<Pose>& path) const;
-  // The pose of A* state `id` (layer = cells x k states per (t, reached); k = headings per cell: 4,
-  // or 1 in mapf).
-  static Pose pose_of(int32_t id, size_t layer, int k);
-  size_t states(ActionModel model) const;  // the A*'s: (t, reached, cell, heading)
+  size_t states(ActionModel model) const;  // the A*'s: (t, reached, cell in a box around the start, heading)
   static int step_cost(const WorldView& world, Pose a, Pose b);
   void reserve(int agent, const std::vector<Pose>& path, bool on);
   bool replan(const WorldView& world, int agent, std::vector<Pose>& path);
