@@ -319,12 +319,18 @@ bool WindowLns::improve_once(const WorldView& world) {
   std::vector<long> fresh;
   for (int a : agents) before += cost_[a], old.push_back(paths_[a]), reserve(a, paths_[a], false);
   size_t done = 0;
-  for (; done < agents.size(); ++done) {
-    const int a = agents[done];
-    if (!replan(world, a, paths_[a])) break;
-    reserve(a, paths_[a], true);
-    fresh.push_back(cost_of(world, a, paths_[a]));
-    after += fresh.back();
+  for (int attempt = 0; attempt < 2; ++attempt) {  // an agent that finds no path goes first the second time
+    for (done = 0, after = 0, fresh.clear(); done < agents.size(); ++done) {
+      const int a = agents[done];
+      if (!replan(world, a, paths_[a])) break;
+      reserve(a, paths_[a], true);
+      fresh.push_back(cost_of(world, a, paths_[a]));
+      after += fresh.back();
+    }
+    if (done == agents.size() || done == 0) break;
+    for (size_t k = 0; k < done; ++k) reserve(agents[k], paths_[agents[k]], false);
+    std::rotate(agents.begin(), agents.begin() + done, agents.begin() + done + 1);
+    std::rotate(old.begin(), old.begin() + done, old.begin() + done + 1);
   }
   if (done == agents.size() && after <= before) {  // an equal plan is kept too: the search drifts on
     for (size_t k = 0; k < agents.size(); ++k) cost_[agents[k]] = fresh[k];
