@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 #include "gdrhcr/dist_table.hpp"
 #include "gdrhcr/grid.hpp"
@@ -114,6 +115,9 @@ struct Bridge::Impl {
     if (budget_s > 0 && o.planner == "gd-rhcr" && !params.has("step-budget"))
       params.set("step-budget", std::to_string(kPlannerShare * budget_s));
     if (budget_s > 0 && o.planner == "rhcr" && !params.has("timeout")) params.set("timeout", std::to_string(budget_s));
+    // The machine's cores for GD-RHCR's pool and the windowed LNS's zones, unless given.
+    if (o.planner == "gd-rhcr" && !params.has("threads"))
+      params.set("threads", std::to_string(std::max(1u, std::thread::hardware_concurrency())));
     const PlannerParams values = PlannerParams::resolve(o.planner, params, MapFacts(grid, n, ActionModel::kRotation));
     params.check_all_used("GDRHCR_PARAMS for planner " + o.planner);
     const TurnPlanning turns = o.turns.empty() ? kLorrTurnPlanning : parse_turn_planning(o.turns);
@@ -126,8 +130,8 @@ struct Bridge::Impl {
       planner = make_planner(values, grid, n, o.seed, ActionModel::kRotation);
       planning_dist = &dist;
     }
-    std::fprintf(stderr, "gdrhcr lorr adapter: planner %s, turns %s, budget %g ms\n", o.planner.c_str(),
-                 turn_planning_name(turns), o.budget_ms);
+    std::fprintf(stderr, "gdrhcr lorr adapter: planner %s, turns %s, budget %g ms, threads %d\n", o.planner.c_str(),
+                 turn_planning_name(turns), o.budget_ms, o.planner == "gd-rhcr" ? values.integer("threads") : 1);
     if (!o.times_out.empty() && !(times = std::fopen(o.times_out.c_str(), "w")))
       throw std::invalid_argument("GDRHCR_TIMES_OUT: cannot write " + o.times_out);
     pos.resize(n);

@@ -82,6 +82,7 @@ std::unique_ptr<Planner> make_gd_rhcr(const PlannerParams& v, const Grid& grid, 
   c.neighbourhood = v.integer("lns-neighbours");
   c.iterations = v.integer("lns-iterations");
   c.step_budget_s = v.real("step-budget");
+  c.threads = v.integer("threads");
   c.seed = seed;
   PibtOptions rollout = pibt_options(v);
   rollout.rotation = PibtOptions::Rotation::kCells;

@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <chrono>
 #include <numeric>
+#include <climits>
 #include <stdexcept>
+#include <thread>
 
 #include "gdrhcr/open_list.hpp"
 
@@ -21,6 +23,7 @@ constexpr long kStaleMin = 100;
 constexpr int kMaxGrowth = 4;  // a stalled search doubles its neighbourhoods up to this many times the size
 constexpr float kKeepTieBreak = 1e-2f;
 constexpr float kFreeMove = 1e-3f;  // a move or turn after the goal
+constexpr size_t kZonedHeld = 2;     // the zones must hold at least 1/kZonedHeld of the delayed agents
 }  // namespace
 
 // One space-time A*'s scratch: per state (t, reached, cell, heading) a stamp and a parent, reset in
@@ -43,18 +46,35 @@ struct WindowLns::Search {
   }
 };
 
+struct WindowLns::Worker {
+  explicit Worker(uint64_t seed) : rng(seed) {}
+  // Its zone: the agents whose start's coordinate along `axis` (0 x, 1 y) lies in [lo, hi].
+  bool holds(const Grid& grid, Cell c) const {
+    const int v = axis ? grid.y_of(c) : grid.x_of(c);
+    return v >= lo && v <= hi;
+  }
+  std::mt19937_64 rng;
+  Search search;
+  int size = 0;  // agents per neighbourhood in this step's search
+  int axis = 0, lo = INT_MIN, hi = INT_MAX;
+  std::vector<int> delayed;  // the delayed agents of its zone
+  long tried = 0, kept = 0, gained = 0, failed = 0;
+};
+
 WindowLns::WindowLns(std::unique_ptr<Planner> inner, const Grid& grid, int num_agents, WindowLnsConfig config,
                      PibtOptions rollout, ActionModel model)
     : inner_(std::move(inner)),
       grid_(grid),
       cfg_(config),
       pibt_(grid, num_agents, config.seed ^ 0x5eedULL, rollout),
-      rng_(config.seed),
-      cells_(grid.num_cells()),
-      search_(std::make_unique<Search>()) {
+      cells_(grid.num_cells()) {
   if (cfg_.window < 1) throw std::invalid_argument("window LNS: the window must be at least one step");
   if (cfg_.neighbourhood < 1) throw std::invalid_argument("window LNS: a neighbourhood needs at least one agent");
-  search_->begin(states(model));  // now, not in the first step's budget
+  if (cfg_.threads < 1) throw std::invalid_argument("window LNS: threads must be at least 1");
+  for (int k = 0; k < cfg_.threads; ++k) {
+    workers_.push_back(std::make_unique<Worker>(cfg_.seed + 0x9e3779b97f4a7c15ULL * static_cast<uint64_t>(k)));
+    workers_.back()->search.begin(states(model));  // now, not in the first step's budget
+  }
 }
 
 // The A*'s states: (t, reached, cell, heading), the cells those of the box of side 2 x window + 1
@@ -80,10 +100,13 @@ nlohmann::json WindowLns::stats() const {
   j["lns_steps"] = steps_searched_;
   j["lns_steps_cut"] = rollouts_cut_;
   j["lns_steps_ended_stale"] = stale_stops_;
-  j["lns_neighbourhoods"] = tried_;
-  j["lns_kept"] = kept_;
-  j["lns_cost_gained"] = gained_;
-  j["lns_failed_searches"] = failed_;
+  long tried = 0, kept = 0, gained = 0, failed = 0;
+  for (const auto& w : workers_) tried += w->tried, kept += w->kept, gained += w->gained, failed += w->failed;
+  j["lns_steps_zoned"] = zoned_steps_;
+  j["lns_neighbourhoods"] = tried;
+  j["lns_kept"] = kept;
+  j["lns_cost_gained"] = gained;
+  j["lns_failed_searches"] = failed;
   j["lns_time_s"] = search_s_;
   return j;
 }
@@ -164,7 +187,7 @@ bool WindowLns::rollout(const WorldView& world, const std::vector<Cell>& next, C
 // A state is (t, reached, cell, heading): once the agent has stood on its goal its steps cost
 // nothing (a move kFreeMove, so it stays unless it is in the way), as it gets its next errand
 // there. False when no path is found within kMaxExpansions.
-bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& path) {
+bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& path, Search& s) {
   const DistRow& row = *rows_[agent];
   const Cell goal = row.goal();
   const int W = cfg_.window;
@@ -173,7 +196,6 @@ bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& pat
   // A state's cell is numbered in the box of side 2W + 1 around the start: the agent cannot leave it.
   const int side = 2 * W + 1, x0 = grid_.x_of(start.cell) - W, y0 = grid_.y_of(start.cell) - W;
   const size_t layer = static_cast<size_t>(side) * side * K;
-  Search& s = *search_;
   s.begin(states(world.action_model));
   auto id_of = [&](int t, int r, Cell c, Heading h) {
     const size_t local = static_cast<size_t>(grid_.y_of(c) - y0) * side + (grid_.x_of(c) - x0);
@@ -244,12 +266,12 @@ bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& pat
 
 // The agents in the way of the picked one: along the path it would take alone (down its distance,
 // one action a step), those planned in each of its cells at that step or the next, in path order.
-void WindowLns::add_blockers(const WorldView& world, int seed_agent, std::vector<int>& agents) const {
+void WindowLns::add_blockers(const WorldView& world, int seed_agent, std::vector<int>& agents, const Worker& w) const {
   const DistRow& row = *rows_[seed_agent];
   const bool rot = world.rotation();
   Pose p = world.pose(seed_agent);
   auto add = [&](int b) {
-    if (b >= 0 && static_cast<int>(agents.size()) < size_ &&
+    if (b >= 0 && static_cast<int>(agents.size()) < w.size && w.holds(grid_, world.positions[b]) &&
         std::find(agents.begin(), agents.end(), b) == agents.end())
       agents.push_back(b);
   };
@@ -274,12 +296,12 @@ void WindowLns::add_blockers(const WorldView& world, int seed_agent, std::vector
 
 // The picked agent, then (every other neighbourhood) the agents in its way, then the agents standing
 // nearest it (breadth first, up to kNeighbourRadius steps).
-std::vector<int> WindowLns::neighbourhood(const WorldView& world, int seed_agent) {
+std::vector<int> WindowLns::neighbourhood(const WorldView& world, int seed_agent, Worker& w) {
   std::vector<int> agents{seed_agent};
-  if (rng_() & 1) add_blockers(world, seed_agent, agents);
+  if (w.rng() & 1) add_blockers(world, seed_agent, agents, w);
   std::vector<Cell> frontier{world.positions[seed_agent]}, next_frontier;
   std::vector<Cell> visited{world.positions[seed_agent]};
-  for (int r = 0; r < kNeighbourRadius && static_cast<int>(agents.size()) < size_; ++r) {
+  for (int r = 0; r < kNeighbourRadius && static_cast<int>(agents.size()) < w.size; ++r) {
     next_frontier.clear();
     for (Cell c : frontier)
       for (Cell c2 : grid_.neighbours(c)) {
@@ -287,10 +309,10 @@ std::vector<int> WindowLns::neighbourhood(const WorldView& world, int seed_agent
         visited.push_back(c2);
         next_frontier.push_back(c2);
       }
-    std::shuffle(next_frontier.begin(), next_frontier.end(), rng_);
+    std::shuffle(next_frontier.begin(), next_frontier.end(), w.rng);
     for (Cell c2 : next_frontier) {
       const int b = at(0, c2);
-      if (b >= 0 && static_cast<int>(agents.size()) < size_ &&
+      if (b >= 0 && static_cast<int>(agents.size()) < w.size && w.holds(grid_, c2) &&
           std::find(agents.begin(), agents.end(), b) == agents.end())
         agents.push_back(b);
     }
@@ -301,19 +323,19 @@ std::vector<int> WindowLns::neighbourhood(const WorldView& world, int seed_agent
 
 // One neighbourhood: its paths planned again, and kept when they cost no more in sum. True when
 // they cost less.
-bool WindowLns::improve_once(const WorldView& world) {
+bool WindowLns::improve_once(const WorldView& world, Worker& w) {
   // The picked agent: of two delayed agents drawn at random, the one the plan delays more.
   int pick = -1;
   long delay = 0;
   for (int k = 0; k < 2; ++k) {
-    const int a = delayed_[rng_() % delayed_.size()];
+    const int a = w.delayed[w.rng() % w.delayed.size()];
     const long d = cost_[a] - lower_[a];
     if (pick < 0 || d > delay) pick = a, delay = d;
   }
   if (delay <= 0) return false;
-  std::vector<int> agents = neighbourhood(world, pick);
-  std::shuffle(agents.begin(), agents.end(), rng_);
-  ++tried_;
+  std::vector<int> agents = neighbourhood(world, pick, w);
+  std::shuffle(agents.begin(), agents.end(), w.rng);
+  ++w.tried;
   long before = 0, after = 0;
   std::vector<std::vector<Pose>> old;
   std::vector<long> fresh;
@@ -322,7 +344,7 @@ bool WindowLns::improve_once(const WorldView& world) {
   for (int attempt = 0; attempt < 2; ++attempt) {  // an agent that finds no path goes first the second time
     for (done = 0, after = 0, fresh.clear(); done < agents.size(); ++done) {
       const int a = agents[done];
-      if (!replan(world, a, paths_[a])) break;
+      if (!replan(world, a, paths_[a], w.search)) break;
       reserve(a, paths_[a], true);
       fresh.push_back(cost_of(world, a, paths_[a]));
       after += fresh.back();
@@ -334,13 +356,62 @@ bool WindowLns::improve_once(const WorldView& world) {
   }
   if (done == agents.size() && after <= before) {  // an equal plan is kept too: the search drifts on
     for (size_t k = 0; k < agents.size(); ++k) cost_[agents[k]] = fresh[k];
-    ++kept_, gained_ += before - after;
+    ++w.kept, w.gained += before - after;
     return after < before;
   }
-  if (done < agents.size()) ++failed_;
+  if (done < agents.size()) ++w.failed;
   for (size_t k = 0; k < done; ++k) reserve(agents[k], paths_[agents[k]], false);
   for (size_t k = 0; k < agents.size(); ++k) paths_[agents[k]] = old[k], reserve(agents[k], old[k], true);
   return false;
+}
+
+// Until `stop` or `iterations` (> 0), or (without them) until a run of neighbourhoods as long as
+// kStaleRounds times the delayed agents (at least kStaleMin) has lowered nothing, after doubling
+// the neighbourhoods' size up to kMaxGrowth times.
+bool WindowLns::search(const WorldView& world, Worker& w, Clock::time_point stop, long iterations) {
+  w.size = cfg_.neighbourhood;
+  const long stale_limit = std::max<long>(kStaleMin, kStaleRounds * static_cast<long>(w.delayed.size()));
+  long stale = 0;
+  for (long k = 0; !w.delayed.empty() && (iterations <= 0 || k < iterations); ++k) {
+    if (Clock::now() >= stop) break;
+    stale = improve_once(world, w) ? 0 : stale + 1;
+    if (iterations <= 0 && stale >= stale_limit) {
+      if (w.size < kMaxGrowth * cfg_.neighbourhood) {
+        w.size *= 2;
+        stale = 0;
+        continue;
+      }
+      return false;
+    }
+  }
+  return true;
+}
+
+int WindowLns::make_zones(const WorldView& world) {
+  const int axis = grid_.height() > grid_.width() ? 1 : 0;
+  std::vector<int> v;
+  for (int a : delayed_) v.push_back(axis ? grid_.y_of(world.positions[a]) : grid_.x_of(world.positions[a]));
+  std::sort(v.begin(), v.end());
+  // A search reaches kNeighbourRadius cells (its neighbours) and `window` cells (paths) from its agents.
+  const int margin = std::max(cfg_.window, kNeighbourRadius) + 1;
+  for (int zones = static_cast<int>(workers_.size()); zones >= 2; --zones) {
+    size_t held = 0;
+    bool fits = static_cast<int>(v.size()) >= 2 * zones;
+    for (int k = 0; fits && k < zones; ++k) {
+      Worker& w = *workers_[k];
+      w.axis = axis;
+      w.lo = k == 0 ? INT_MIN : v[v.size() * k / zones] + margin;
+      w.hi = k + 1 == zones ? INT_MAX : v[v.size() * (k + 1) / zones] - margin;
+      w.delayed.clear();
+      if (w.lo <= w.hi)
+        for (int a : delayed_)
+          if (w.holds(grid_, world.positions[a])) w.delayed.push_back(a);
+      fits = !w.delayed.empty();
+      held += w.delayed.size();
+    }
+    if (fits && held * kZonedHeld >= delayed_.size()) return zones;  // else the margins leave out too many
+  }
+  return 1;
 }
 
 StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next) {
@@ -381,24 +452,25 @@ StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next)
     if (cost_[i] > lower_[i]) delayed_.push_back(i);
   }
   ++steps_searched_;
-  // Until the deadline or the iterations, or until a run of neighbourhoods as long as
-  // kStaleRounds times the delayed agents (at least kStaleMin) has lowered nothing.
-  size_ = cfg_.neighbourhood;
-  const long stale_limit = std::max<long>(kStaleMin, kStaleRounds * static_cast<long>(delayed_.size()));
-  long stale = 0;
-  for (int k = 0; !delayed_.empty() && (cfg_.iterations <= 0 || k < cfg_.iterations); ++k) {
-    if (Clock::now() >= stop) break;
-    stale = improve_once(world) ? 0 : stale + 1;
-    if (cfg_.iterations <= 0 && stale >= stale_limit) {
-      if (size_ < kMaxGrowth * cfg_.neighbourhood) {  // larger neighbourhoods before giving up
-        size_ *= 2;
-        stale = 0;
-        continue;
-      }
-      ++stale_stops_;
-      break;
-    }
+  long iterations = cfg_.iterations;  // 0: until the deadline or a stale run
+  const int zones = workers_.size() > 1 ? make_zones(world) : 1;
+  if (zones > 1) {  // the zones at once, then everyone
+    ++zoned_steps_;
+    auto zoned_stop = stop;
+    if (stop != Clock::time_point::max())
+      zoned_stop = Clock::now() + std::chrono::duration_cast<Clock::duration>((stop - Clock::now()) * WindowLnsConfig::kZonedShare);
+    const long zoned = iterations > 0 ? std::max(1L, static_cast<long>(iterations * WindowLnsConfig::kZonedShare) / zones)
+                                      : 0;
+    std::vector<std::thread> threads;
+    for (int k = 1; k < zones; ++k)
+      threads.emplace_back([&, k] { search(world, *workers_[k], zoned_stop, zoned); });
+    search(world, *workers_[0], zoned_stop, zoned);
+    for (auto& t : threads) t.join();
+    if (iterations > 0) iterations = std::max(0L, iterations - zoned * zones);
   }
+  Worker& w = *workers_[0];
+  w.axis = 0, w.lo = INT_MIN, w.hi = INT_MAX, w.delayed = delayed_;
+  if ((cfg_.iterations <= 0 || iterations > 0) && !search(world, w, stop, iterations)) ++stale_stops_;
   for (int i = 0; i < n; ++i) {
     next[i] = paths_[i][1].cell;
     if (world.rotation()) (*world.next_headings)[i] = paths_[i][1].heading;

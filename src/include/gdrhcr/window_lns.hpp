@@ -40,10 +40,13 @@ struct WindowLnsConfig {
   int neighbourhood = 8;   // agents planned again together
   int iterations = 0;      // neighbourhoods tried per step (0 = until the deadline)
   double step_budget_s = 0;  // the step's wall-clock budget (0 = none; the caller's may be smaller)
+  int threads = 1;           // zones of the map searched at once, one thread each (the planner's pool)
   // Of the budget: the planner beneath gets this share, and the search stops at kStopShare.
   static constexpr double kInnerShare = 0.5;
   static constexpr double kStopShare = 0.9;
   static constexpr int kMaxExpansions = 20000;  // per A*; a search cut short fails
+  // Of the search's time, with threads: the zones searched at once; then one search over everyone.
+  static constexpr double kZonedShare = 0.75;
   uint64_t seed = 0;
 };
 
@@ -74,6 +77,7 @@ class WindowLns : public Planner {
 
  private:
   struct Search;  // the scratch tables of one A*
+  struct Worker;  // one thread's search: its zone, its delayed agents, its A*, its counters
   using Clock = std::chrono::steady_clock;
   // False when `stop` passed before the window was filled.
   bool rollout(const WorldView& world, const std::vector<Cell>& next, Clock::time_point stop);
@@ -81,10 +85,18 @@ class WindowLns : public Planner {
   size_t states(ActionModel model) const;  // the A*'s: (t, reached, cell in a box around the start, heading)
   static int step_cost(const WorldView& world, Pose a, Pose b);
   void reserve(int agent, const std::vector<Pose>& path, bool on);
-  bool replan(const WorldView& world, int agent, std::vector<Pose>& path);
-  std::vector<int> neighbourhood(const WorldView& world, int seed_agent);
-  void add_blockers(const WorldView& world, int seed_agent, std::vector<int>& agents) const;
-  bool improve_once(const WorldView& world);
+  bool replan(const WorldView& world, int agent, std::vector<Pose>& path, Search& s);
+  std::vector<int> neighbourhood(const WorldView& world, int seed_agent, Worker& w);
+  void add_blockers(const WorldView& world, int seed_agent, std::vector<int>& agents, const Worker& w) const;
+  bool improve_once(const WorldView& world, Worker& w);
+  // Neighbourhoods until `stop`, `iterations` (> 0) or a stale run; false after a stale run.
+  bool search(const WorldView& world, Worker& w, Clock::time_point stop, long iterations);
+  // The zones of this step, one per worker from the first, and their delayed agents: stripes along
+  // the map's longer side, cut at the delayed agents' quantiles, each leaving out the agents within
+  // a margin of its borders so that no two zones' searches read or write the same cell. As many
+  // zones as workers when they fit (each holds a delayed agent, and together at least half of
+  // them), else fewer; 1 = none (the search runs over everyone alone).
+  int make_zones(const WorldView& world);
   int& at(int t, Cell c) { return reserved_[static_cast<size_t>(t) * cells_ + c]; }
   int at(int t, Cell c) const { return reserved_[static_cast<size_t>(t) * cells_ + c]; }
 
@@ -92,18 +104,16 @@ class WindowLns : public Planner {
   const Grid& grid_;
   WindowLnsConfig cfg_;
   PibtStep pibt_;
-  std::mt19937_64 rng_;
-  int size_ = 0;  // agents per neighbourhood in this step's search
   int cells_;
   std::vector<std::vector<Pose>> paths_;
   std::vector<long> cost_, lower_;  // per agent: its cost in the plan, its distance (no plan costs less)
   std::vector<int> delayed_;        // the agents whose cost is above their distance, at the step's start
   std::vector<int> reserved_;  // per (t, cell): the agent planned there, or -1
   std::vector<std::shared_ptr<const DistRow>> rows_;
-  std::unique_ptr<Search> search_;
+  std::vector<std::unique_ptr<Worker>> workers_;  // the first also searches everyone after the zones
   std::vector<std::vector<Pose>> last_;  // the plan of the step before
   int last_timestep_ = -2;
-  long steps_searched_ = 0, rollouts_cut_ = 0, stale_stops_ = 0, tried_ = 0, kept_ = 0, gained_ = 0, failed_ = 0;
+  long steps_searched_ = 0, rollouts_cut_ = 0, stale_stops_ = 0, zoned_steps_ = 0;
   double search_s_ = 0;
 };
 
