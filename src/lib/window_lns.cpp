@@ -323,7 +323,7 @@ std::vector<int> WindowLns::neighbourhood(const WorldView& world, int seed_agent
 
 // One neighbourhood: its paths planned again, and kept when they cost no more in sum. True when
 // they cost less.
-bool WindowLns::improve_once(const WorldView& world, Worker& w) {
+bool WindowLns::improve_once(const WorldView& world, Worker& w, Clock::time_point stop) {
   // The picked agent: of two delayed agents drawn at random, the one the plan delays more.
   int pick = -1;
   long delay = 0;
@@ -344,12 +344,12 @@ bool WindowLns::improve_once(const WorldView& world, Worker& w) {
   for (int attempt = 0; attempt < 2; ++attempt) {  // an agent that finds no path goes first the second time
     for (done = 0, after = 0, fresh.clear(); done < agents.size(); ++done) {
       const int a = agents[done];
-      if (!replan(world, a, paths_[a], w.search)) break;
+      if (Clock::now() >= stop || !replan(world, a, paths_[a], w.search)) break;  // the deadline: as a failure
       reserve(a, paths_[a], true);
       fresh.push_back(cost_of(world, a, paths_[a]));
       after += fresh.back();
     }
-    if (done == agents.size() || done == 0) break;
+    if (done == agents.size() || done == 0 || Clock::now() >= stop) break;
     for (size_t k = 0; k < done; ++k) reserve(agents[k], paths_[agents[k]], false);
     std::rotate(agents.begin(), agents.begin() + done, agents.begin() + done + 1);
     std::rotate(old.begin(), old.begin() + done, old.begin() + done + 1);
@@ -374,7 +374,7 @@ bool WindowLns::search(const WorldView& world, Worker& w, Clock::time_point stop
   long stale = 0;
   for (long k = 0; !w.delayed.empty() && (iterations <= 0 || k < iterations); ++k) {
     if (Clock::now() >= stop) break;
-    stale = improve_once(world, w) ? 0 : stale + 1;
+    stale = improve_once(world, w, stop) ? 0 : stale + 1;
     if (iterations <= 0 && stale >= stale_limit) {
       if (w.size < kMaxGrowth * cfg_.neighbourhood) {
         w.size *= 2;

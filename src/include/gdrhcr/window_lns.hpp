@@ -88,7 +88,8 @@ class WindowLns : public Planner {
   bool replan(const WorldView& world, int agent, std::vector<Pose>& path, Search& s);
   std::vector<int> neighbourhood(const WorldView& world, int seed_agent, Worker& w);
   void add_blockers(const WorldView& world, int seed_agent, std::vector<int>& agents, const Worker& w) const;
-  bool improve_once(const WorldView& world, Worker& w);
+  // One neighbourhood (given up, as a failure, when `stop` passes between two of its A*s).
+  bool improve_once(const WorldView& world, Worker& w, Clock::time_point stop);
   // Neighbourhoods until `stop`, `iterations` (> 0) or a stale run; false after a stale run.
   bool search(const WorldView& world, Worker& w, Clock::time_point stop, long iterations);
   // The zones of this step, one per worker from the first, and their delayed agents: stripes along
