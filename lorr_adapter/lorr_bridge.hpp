@@ -13,7 +13,8 @@ namespace gdrhcr_lorr {
 
 // Read from the environment (scripts/bench_lorr.sh sets them):
 //   GDRHCR_PLANNER    a name of gdrhcr::make_planner (default gd-rhcr)
-//   GDRHCR_PARAMS     its parameters as on gdrhcr_sim's command line, e.g. "--H 10 --V 3"
+//   GDRHCR_PARAMS     its parameters as on gdrhcr_sim's command line, e.g. "--H 10 --V 3";
+//                     GD-RHCR's threads are the machine's cores unless it sets them
 //   GDRHCR_BUDGET_MS  our time per step in ms (0 = none), distance rows included: the rows of
 //                     new goals get up to half of it (an agent whose goal has no row yet keeps
 //                     its last goal; the first steps, until every agent had one, are all waits

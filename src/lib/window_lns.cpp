@@ -3,9 +3,10 @@
 
 #include <algorithm>
 #include <chrono>
-#include <numeric>
 #include <climits>
+#include <numeric>
 #include <stdexcept>
+#include <system_error>
 #include <thread>
 
 #include "gdrhcr/open_list.hpp"
@@ -462,8 +463,13 @@ StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next)
     const long zoned = iterations > 0 ? std::max(1L, static_cast<long>(iterations * WindowLnsConfig::kZonedShare) / zones)
                                       : 0;
     std::vector<std::thread> threads;
-    for (int k = 1; k < zones; ++k)
-      threads.emplace_back([&, k] { search(world, *workers_[k], zoned_stop, zoned); });
+    for (int k = 1; k < zones; ++k) {
+      try {
+        threads.emplace_back([&, k] { search(world, *workers_[k], zoned_stop, zoned); });
+      } catch (const std::system_error&) {  // no thread to be had: this zone here, before the first
+        search(world, *workers_[k], zoned_stop, zoned);
+      }
+    }
     search(world, *workers_[0], zoned_stop, zoned);
     for (auto& t : threads) t.join();
     if (iterations > 0) iterations = std::max(0L, iterations - zoned * zones);
