@@ -63,6 +63,38 @@ void check_plan(const WindowLns& lns, const WorldView& world, int window) {
     for (auto& [m, i] : moves) EXPECT_EQ(moves.count({m.second, m.first}), 0u) << "agent " << i << " swaps at t " << t;
   }
 }
+
+// A fleet on random errands, moved one step at a time by a windowed LNS planner: after each step
+// the plan it holds is checked, and its first step must be the one executed.
+struct Fleet {
+  Fleet(const Grid& g, ActionModel model, int n, uint64_t seed)
+      : grid(g), model(model), dist(g, model), tasks(g, seed), pos(random_starts(g, n, seed)), heads(n, kEast),
+        next_heads(n, kEast), goals(n) {
+    for (int i = 0; i < n; ++i) goals[i] = {tasks.next_goal(i, pos[i])};
+  }
+  void step(Planner& planner, const WindowLns& lns, int t, int window) {
+    const int n = static_cast<int>(pos.size());
+    WorldView world{grid, dist, t, pos, goals};
+    world.action_model = model;
+    if (model == ActionModel::kRotation) world.headings = &heads, world.next_headings = &next_heads;
+    std::vector<Cell> next(n);
+    planner.plan_step(world, next);
+    check_plan(lns, world, window);
+    for (int i = 0; i < n; ++i) {
+      EXPECT_EQ(next[i], lns.plan()[i][1].cell);  // the plan's first step is what is executed
+      pos[i] = next[i];
+      heads[i] = next_heads[i];
+      if (pos[i] == goals[i][0]) goals[i] = {tasks.next_goal(i, pos[i])};
+    }
+  }
+  const Grid& grid;
+  ActionModel model;
+  DistTable dist;
+  RandomNavigationStream tasks;
+  std::vector<Cell> pos;
+  std::vector<Heading> heads, next_heads;
+  std::vector<std::vector<Cell>> goals;
+};
 }  // namespace
 
 TEST(WindowLns, HoldsAConflictFreePlanOfTheModelsActionsAndLowersItsCost) {
@@ -70,30 +102,14 @@ TEST(WindowLns, HoldsAConflictFreePlanOfTheModelsActionsAndLowersItsCost) {
   for (ActionModel model : {ActionModel::kRotation, ActionModel::kMapf}) {
     SCOPED_TRACE(action_model_name(model));
     const int n = 200, window = 8;
-    DistTable dist(g, model);
-    RandomNavigationStream tasks(g, 3);
-    std::vector<Cell> pos = random_starts(g, n, 3);
-    std::vector<Heading> heads(n, kEast), next_heads(n, kEast);
-    std::vector<std::vector<Cell>> goals(n);
-    for (int i = 0; i < n; ++i) goals[i] = {tasks.next_goal(i, pos[i])};
+    Fleet fleet(g, model, n, 3);
     Params params = lns_params(window, 200);
     auto planner = make_planner("gd-rhcr", params, g, n, 3, model);
     auto* lns = dynamic_cast<WindowLns*>(planner.get());
     ASSERT_NE(lns, nullptr) << "lns-window > 0 wraps GD-RHCR in the windowed LNS";
     long gained = 0;
     for (int step = 0; step < 20; ++step) {
-      WorldView world{g, dist, step, pos, goals};
-      world.action_model = model;
-      if (model == ActionModel::kRotation) world.headings = &heads, world.next_headings = &next_heads;
-      std::vector<Cell> next(n);
-      planner->plan_step(world, next);
-      check_plan(*lns, world, window);
-      for (int i = 0; i < n; ++i) {
-        EXPECT_EQ(next[i], lns->plan()[i][1].cell);  // the plan's first step is what is executed
-        pos[i] = next[i];
-        heads[i] = next_heads[i];
-        if (pos[i] == goals[i][0]) goals[i] = {tasks.next_goal(i, pos[i])};
-      }
+      fleet.step(*planner, *lns, step, window);
       gained = planner->stats()["lns_cost_gained"].get<long>();
     }
     EXPECT_GT(gained, 0) << "200 neighbourhoods a step never lowered the plan's cost";
@@ -131,31 +147,14 @@ TEST(WindowLns, ZonesSearchedAtOnceKeepThePlanConflictFreeAndRunsReproducible) {
   const Grid g = Grid::load(repo("maps/warehouse-10-20-10-2-1.map"));
   const ActionModel model = ActionModel::kRotation;
   const int n = 400, window = 5;
-  DistTable dist(g, model);
   std::vector<std::vector<std::vector<Pose>>> plans(2);
   for (int run = 0; run < 2; ++run) {
-    RandomNavigationStream tasks(g, 7);
-    std::vector<Cell> pos = random_starts(g, n, 7);
-    std::vector<Heading> heads(n, kEast), next_heads(n, kEast);
-    std::vector<std::vector<Cell>> goals(n);
-    for (int i = 0; i < n; ++i) goals[i] = {tasks.next_goal(i, pos[i])};
+    Fleet fleet(g, model, n, 7);
     Params params = lns_params(window, 300);
     params.set("threads", "2");
     auto planner = make_planner("gd-rhcr", params, g, n, 7, model);
     auto& lns = dynamic_cast<WindowLns&>(*planner);
-    for (int step = 0; step < 10; ++step) {
-      WorldView world{g, dist, step, pos, goals};
-      world.action_model = model;
-      world.headings = &heads, world.next_headings = &next_heads;
-      std::vector<Cell> next(n);
-      planner->plan_step(world, next);
-      check_plan(lns, world, window);
-      for (int i = 0; i < n; ++i) {
-        pos[i] = next[i];
-        heads[i] = next_heads[i];
-        if (pos[i] == goals[i][0]) goals[i] = {tasks.next_goal(i, pos[i])};
-      }
-    }
+    for (int step = 0; step < 10; ++step) fleet.step(*planner, lns, step, window);
     const auto stats = planner->stats();
     EXPECT_EQ(stats["lns_steps_zoned"].get<long>(), 10) << "161 columns hold two zones every step";
     EXPECT_GT(stats["lns_cost_gained"].get<long>(), 0);
