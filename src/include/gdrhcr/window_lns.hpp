@@ -17,12 +17,12 @@
 // picked at random, with (every other time) the agents in the way of the path it would take alone,
 // then the agents standing nearest it. Their paths are taken out and planned again one by one in a
 // random order, each by space-time A* over the model's states around the paths of all the others
-// (an agent that finds no path goes first in a second try); the new paths are kept when they cost
-// no more in sum (so the search drifts across equal plans), else the old ones come back. A search
-// that a long run of neighbourhoods has not lowered doubles their size, up to four times the first,
-// then stops. With threads, stripes of the map whose searches cannot touch the same cell are
-// searched at once, one thread each, then everyone together. The first step of the final plan is
-// executed.
+// (an agent that finds no path goes first in the next try, up to four tries); the new paths are
+// kept when they cost no more in sum (so the search drifts across equal plans), else the old ones
+// come back. A search that a long run of neighbourhoods has not lowered doubles their size, up to
+// four times the first, then stops. With threads, stripes of the map whose searches cannot touch
+// the same cell are searched at once, one thread each, then everyone together. The first step of
+// the final plan is executed.
 // Only plans free of conflicts are ever held, so what is executed is valid whenever the search
 // stops. Robots that cannot move and blocked cells (the ROS node's offline robots and late robots'
 // cells) turn the search off for that step: the step of the planner beneath is executed as it is.
