@@ -212,7 +212,7 @@ struct Bridge::Impl {
                       ActionModel::kRotation);
   }
 
-  static constexpr double kPlannerShare = 0.9;  // of the budget, for GD-RHCR's step-budget
+  static constexpr double kPlannerShare = 0.93;  // of the budget, for GD-RHCR's step-budget
   static constexpr double kOverrunDecay = 0.99;  // per step, of the overrun remembered
   static constexpr int kRowBatch = 2;  // rows computed at once: one row's time on two cores
   double overrun_s = 0;  // how far the planner's steps ran past their budget lately

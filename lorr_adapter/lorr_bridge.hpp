@@ -18,7 +18,7 @@ namespace gdrhcr_lorr {
 //   GDRHCR_BUDGET_MS  our time per step in ms (0 = none), distance rows included: the rows of
 //                     new goals get up to half of it (an agent whose goal has no row yet keeps
 //                     its last goal; the first steps, until every agent had one, are all waits
-//                     with 90% of the budget for rows), GD-RHCR's step-budget is 90% of it,
+//                     with 90% of the budget for rows), GD-RHCR's step-budget is 93% of it,
 //                     less the rows' time, and RHCR's PBS timeout all of it, unless
 //                     GDRHCR_PARAMS sets them
 //   GDRHCR_TIMES_OUT  a file that gets our time per step in ms, one line per step (optional)

@@ -46,7 +46,7 @@ struct WindowLnsConfig {
   int threads = 1;           // zones of the map searched at once, one thread each (the planner's pool)
   // Of the budget: the planner beneath gets this share, and the search stops at kStopShare.
   static constexpr double kInnerShare = 0.5;
-  static constexpr double kStopShare = 0.9;
+  static constexpr double kStopShare = 0.95;
   static constexpr int kMaxExpansions = 20000;  // per A*; a search cut short fails
   // Of the search's time, with threads: the zones searched at once; then one search over everyone.
   static constexpr double kZonedShare = 0.75;
