@@ -26,7 +26,7 @@ constexpr float kKeepTieBreak = 1e-2f;
 constexpr float kFreeMove = 1e-3f;  // a move or turn after the goal
 constexpr size_t kZonedHeld = 2;     // the zones must hold at least 1/kZonedHeld of the delayed agents
 // A neighbourhood is planned up to this many times, each time with the agent that found no path
-// first. Failed neighbourhoods feed a jam (Paris: 45% of them failed with two tries, 2% with four).
+// first: failed neighbourhoods feed a jam (docs/results.md, session 29).
 constexpr int kAttempts = 4;
 }  // namespace
 
@@ -345,7 +345,7 @@ bool WindowLns::improve_once(const WorldView& world, Worker& w, Clock::time_poin
   std::vector<long> fresh;
   for (int a : agents) before += cost_[a], old.push_back(paths_[a]), reserve(a, paths_[a], false);
   size_t done = 0;
-  for (int attempt = 0; attempt < kAttempts; ++attempt) {  // an agent that finds no path goes first in the next
+  for (int attempt = 0; attempt < kAttempts; ++attempt) {  // the agent that found no path goes first
     for (done = 0, after = 0, fresh.clear(); done < agents.size(); ++done) {
       const int a = agents[done];
       if (Clock::now() >= stop || !replan(world, a, paths_[a], w.search)) break;  // the deadline: as a failure
