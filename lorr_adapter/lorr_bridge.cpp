@@ -106,7 +106,7 @@ BridgeOptions bridge_options_from_env() {
 }
 
 struct Bridge::Impl {
-  Impl(int rows, int cols, const std::vector<int>& map, int n, const BridgeOptions& o)
+  Impl(int rows, int cols, const std::vector<int>& map, int n, const BridgeOptions& o, Clock::time_point started)
       : options(o), grid(grid_of(rows, cols, map)),
         dist(grid, ActionModel::kRotation, size_t(o.dist_budget_mb) << 20, step_costs_of(o, grid, n)),
         num_agents(n) {
@@ -134,12 +134,43 @@ struct Bridge::Impl {
                  turn_planning_name(turns), o.budget_ms, o.planner == "gd-rhcr" ? values.integer("threads") : 1);
     if (!o.times_out.empty() && !(times = std::fopen(o.times_out.c_str(), "w")))
       throw std::invalid_argument("GDRHCR_TIMES_OUT: cannot write " + o.times_out);
+    precompute_rows(o.preprocess_s > 0 ? started + std::chrono::duration_cast<Clock::duration>(
+                                                     std::chrono::duration<double>(kRowsShare * o.preprocess_s))
+                                       : Clock::time_point::max());
     pos.resize(n);
     headings.resize(n);
     next_headings.resize(n);
     next.resize(n);
     goals.resize(n);
     last_goal.assign(n, kNoCell);
+  }
+
+  // In the preprocessing phase: the row of every free cell, when all of them fit in the table's
+  // memory budget (GDRHCR_DIST_MB), computed in batches on the thread pool until `deadline`.
+  // Goals are not known before the first step (the Start-Kit reveals them then), but every goal
+  // is a free cell: with every row at hand the first step plans at once, with no all-wait
+  // warm-up, and no step spends its budget on the rows of new goals. When they do not all fit
+  // (or the deadline comes first), rows are computed as goals come, as below.
+  void precompute_rows(Clock::time_point deadline) {
+    const auto& cells = grid.free_cells();
+    const size_t need_mb = (cells.size() * planning_dist->row_bytes() >> 20) + 1;
+    if (cells.size() * planning_dist->row_bytes() > planning_dist->budget_bytes()) {
+      std::fprintf(stderr,
+                   "gdrhcr lorr adapter: the rows of all %zu free cells need %zu MB, more than GDRHCR_DIST_MB %zu: "
+                   "rows are computed as goals come\n",
+                   cells.size(), need_mb, planning_dist->budget_bytes() >> 20);
+      return;
+    }
+    const auto t0 = Clock::now();
+    size_t done = 0;
+    while (done < cells.size() && Clock::now() < deadline) {
+      const size_t end = std::min(cells.size(), done + kPrecomputeBatch);
+      planning_dist->prefetch(std::vector<Cell>(cells.begin() + done, cells.begin() + end));
+      done = end;
+    }
+    stats.rows_precomputed = planning_dist->cached_rows();
+    std::fprintf(stderr, "gdrhcr lorr adapter: %zu of %zu rows computed before the first step (%zu MB) in %.1f s\n",
+                 done, cells.size(), need_mb, std::chrono::duration<double>(Clock::now() - t0).count());
   }
 
   // The distance rows of the agents' goals (current ones first, then those revealed ahead),
@@ -215,6 +246,8 @@ struct Bridge::Impl {
   static constexpr double kPlannerShare = 0.93;  // of the budget, for GD-RHCR's step-budget
   static constexpr double kOverrunDecay = 0.99;  // per step, of the overrun remembered
   static constexpr int kRowBatch = 2;  // rows computed at once: one row's time on two cores
+  static constexpr size_t kPrecomputeBatch = 256;  // rows per batch before the first step
+  static constexpr double kRowsShare = 0.8;  // of the preprocessing limit, until the rows stop
   double overrun_s = 0;  // how far the planner's steps ran past their budget lately
   double batch_s = 0;    // the slowest batch of rows lately (decaying by kOverrunDecay a batch)
   BridgeStats stats;
@@ -274,8 +307,11 @@ BridgeOptions with_prep(BridgeOptions o, const Grid& grid, int n) {
 
 }  // namespace
 
-Bridge::Bridge(int rows, int cols, const std::vector<int>& map, int num_agents, const BridgeOptions& options)
-    : impl_(std::make_unique<Impl>(rows, cols, map, num_agents, with_prep(options, grid_of(rows, cols, map), num_agents))) {}
+Bridge::Bridge(int rows, int cols, const std::vector<int>& map, int num_agents, const BridgeOptions& options) {
+  const auto started = Clock::now();  // the preprocessing phase's limit counts from here
+  impl_ = std::make_unique<Impl>(rows, cols, map, num_agents, with_prep(options, grid_of(rows, cols, map), num_agents),
+                                 started);
+}
 
 Bridge::~Bridge() = default;
 
@@ -317,8 +353,9 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
   const bool warming = std::find(m.last_goal.begin(), m.last_goal.end(), kNoCell) != m.last_goal.end();
   const uint64_t rows_at_start = m.planning_dist->bfs_count();
   m.warm_rows(t0 + (!capped ? limit * 3 / 10 : warming ? budget * 9 / 10 : budget / 2));
-  m.stats.rows_before_planning += m.planning_dist->bfs_count() - rows_at_start;
-  if (!m.goals_with_rows() || (warming && capped)) {
+  const uint64_t rows_now = m.planning_dist->bfs_count() - rows_at_start;
+  m.stats.rows_before_planning += rows_now;
+  if (!m.goals_with_rows() || (warming && capped && rows_now > 0)) {
     ++m.stats.warm_up_steps;
     std::fprintf(stderr, "gdrhcr lorr adapter: timestep %d: computing distance rows, every agent waits\n", timestep);
     m.record(t0);

@@ -23,8 +23,11 @@ namespace gdrhcr_lorr {
 //                     GDRHCR_PARAMS sets them
 //   GDRHCR_TIMES_OUT  a file that gets our time per step in ms, one line per step (optional)
 //   GDRHCR_SEED       seed for the planner's tie-breaks (default 0)
-//   GDRHCR_DIST_MB    memory for distance rows (default 2048: a fleet of 10,000 on LoRR's
-//                     warehouse holds about 10,000 rows of 77 KB)
+//   GDRHCR_DIST_MB    memory for distance rows (default 8192). When the rows of all the map's
+//                     free cells fit in it, they are computed in the Start-Kit's preprocessing
+//                     phase (within 80% of its limit): no step then waits for a row. Paris_1_256
+//                     (47,024 free cells, 141 KB a rotation row) needs 6.4 GB, LoRR's
+//                     warehouse_large 4.3 GB; a smaller value keeps rows to the goals in use
 //   GDRHCR_PREP_DIR   offline preparation (gdrhcr/map_prep.hpp) cached in this directory: in the
 //                     Start-Kit's preprocessing phase the adapter loads the file for this map,
 //                     fleet size and model, or makes it (trials of at most a third of the
@@ -41,7 +44,7 @@ struct BridgeOptions {
   std::string times_out;  // where our time per step goes (empty: nowhere)
   uint64_t seed = 0;
   std::string turns;  // "native" or "mapf-wait"; empty = gdrhcr::kLorrTurnPlanning
-  int dist_budget_mb = 2048;
+  int dist_budget_mb = 8192;
   std::string prep_dir;     // GDRHCR_PREP_DIR; empty = no offline preparation
   double preprocess_s = 0;  // the Start-Kit's preprocessing limit (0 = none given)
 };
@@ -53,6 +56,7 @@ struct BridgeStats {
   long steps = 0;
   long warm_up_steps = 0;   // all-wait steps while some agent had no goal with a row
   long over_budget = 0;     // steps that took longer than the budget (with one)
+  uint64_t rows_precomputed = 0;      // distance rows computed before the first step
   uint64_t rows_before_planning = 0;  // distance rows computed in the row phase
   uint64_t rows_in_planner = 0;       // rows the planner had to compute itself (past its budget)
   uint64_t evictions = 0;             // rows the distance table dropped to keep its memory budget

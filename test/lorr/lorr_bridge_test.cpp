@@ -1,6 +1,7 @@
 // The Start-Kit adapter's core side (lorr_adapter/lorr_bridge.hpp), driven as the Start-Kit
-// drives it but without the Start-Kit: the distance rows' warm-up within a budget, and rows the
-// distance table evicted computed again before the planner's step, not inside it.
+// drives it but without the Start-Kit: every cell's distance row before the first step when they
+// fit, else the rows' warm-up within a budget, and rows the distance table evicted computed
+// again before the planner's step, not inside it.
 #include "lorr_bridge.hpp"
 
 #include <gtest/gtest.h>
@@ -50,38 +51,59 @@ struct SmallFleet {
     const auto& free = g.free_cells();
     for (int i = 0; i < n; ++i) pos[i] = free[i], goals[i] = {free[free.size() - 1 - 7 * i]};
   }
-  Bridge bridge(double budget_ms) const {
+  // With `dist_mb` of rows: the default holds every free cell's row (computed before the first
+  // step); 1 MB holds the goals' rows but not every cell's, so rows come as goals do.
+  Bridge bridge(double budget_ms, int dist_mb = BridgeOptions{}.dist_budget_mb) const {
     BridgeOptions o;
     o.budget_ms = budget_ms;
+    o.dist_budget_mb = dist_mb;
     return Bridge(g.height(), g.width(), start_kit_map(g), n, o);
+  }
+  // Steps [from, to] as the Start-Kit would, each checked: free cells, no two agents in one.
+  // Returns the forward moves made; the first step's actions go to `first` if given.
+  int run(Bridge& bridge, int from, int to, std::vector<int>* first = nullptr) {
+    std::vector<int> actions;
+    int forward = 0;
+    for (int t = from; t <= to; ++t) {
+      bridge.plan(t, 1.0, pos, head, goals, actions);
+      if (first && t == from) *first = actions;
+      EXPECT_EQ(static_cast<int>(actions.size()), n);
+      std::set<int> cells;
+      for (int i = 0; i < n; ++i) {
+        forward += actions[i] == 0;
+        const Pose p = gdrhcr::apply_action(g, Pose{pos[i], static_cast<gdrhcr::Heading>(head[i])}, our_action(actions[i]));
+        EXPECT_TRUE(g.is_free(p.cell)) << "agent " << i << " at step " << t;
+        pos[i] = p.cell, head[i] = p.heading;
+        EXPECT_TRUE(cells.insert(pos[i]).second) << "two agents in cell " << pos[i] << " after step " << t;
+      }
+    }
+    return forward;
   }
 };
 
+TEST(LorrBridge, WhenEveryCellsRowFitsTheRowsComeBeforeTheFirstStepAndItMoves) {
+  SmallFleet f;
+  Bridge bridge = f.bridge(100);
+  EXPECT_EQ(bridge.stats().rows_precomputed, f.g.free_cells().size());
+  std::vector<int> first;
+  f.run(bridge, 0, 0, &first);
+  EXPECT_NE(first, std::vector<int>(f.n, kWait)) << "the first step turns or moves agents: no warm-up";
+  EXPECT_GT(f.run(bridge, 1, 30), f.n);
+  const auto s = bridge.stats();
+  EXPECT_EQ(s.warm_up_steps, 0);
+  EXPECT_EQ(s.rows_before_planning, 0u);
+  EXPECT_EQ(s.rows_in_planner, 0u);
+}
+
 TEST(LorrBridge, WithABudgetTheWarmUpWaitsOnceThenTheFleetMovesWithoutCollisions) {
   SmallFleet f;
-  const Grid& g = f.g;
-  const int n = f.n;
-  auto& pos = f.pos;
-  auto& head = f.head;
-  Bridge bridge = f.bridge(100);
+  Bridge bridge = f.bridge(100, 1);
+  EXPECT_EQ(bridge.stats().rows_precomputed, 0u) << "every cell's row does not fit in 1 MB";
   std::vector<int> actions;
-  bridge.plan(0, 1.0, pos, head, f.goals, actions);
-  EXPECT_EQ(actions, std::vector<int>(n, kWait)) << "the step that computes the rows is all waits";
+  bridge.plan(0, 1.0, f.pos, f.head, f.goals, actions);
+  EXPECT_EQ(actions, std::vector<int>(f.n, kWait)) << "the step that computes the rows is all waits";
   EXPECT_EQ(bridge.stats().warm_up_steps, 1);
-  int forward = 0;
-  for (int t = 1; t <= 30; ++t) {
-    bridge.plan(t, 1.0, pos, head, f.goals, actions);
-    ASSERT_EQ(static_cast<int>(actions.size()), n);
-    std::set<int> cells;
-    for (int i = 0; i < n; ++i) {
-      forward += actions[i] == 0;
-      const Pose p = gdrhcr::apply_action(g, Pose{pos[i], static_cast<gdrhcr::Heading>(head[i])}, our_action(actions[i]));
-      ASSERT_TRUE(g.is_free(p.cell)) << "agent " << i << " at step " << t;
-      pos[i] = p.cell, head[i] = p.heading;
-      ASSERT_TRUE(cells.insert(pos[i]).second) << "two agents in cell " << pos[i] << " after step " << t;
-    }
-  }
-  EXPECT_GT(forward, n);
+  EXPECT_GT(f.run(bridge, 1, 30), f.n);
   EXPECT_EQ(bridge.stats().warm_up_steps, 1);
   EXPECT_EQ(bridge.stats().steps, 31);
 }
@@ -89,7 +111,7 @@ TEST(LorrBridge, WithABudgetTheWarmUpWaitsOnceThenTheFleetMovesWithoutCollisions
 TEST(LorrBridge, HoweverShortTheBudgetRowsKeepComingAndTheWarmUpEnds) {
   // A budget far too short for any row: one batch of rows per step still comes.
   SmallFleet f;
-  Bridge bridge = f.bridge(0.001);
+  Bridge bridge = f.bridge(0.001, 1);
   std::vector<int> actions;
   for (int t = 0; t < 15; ++t) bridge.plan(t, 1.0, f.pos, f.head, f.goals, actions);
   const auto s = bridge.stats();
