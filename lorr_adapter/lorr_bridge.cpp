@@ -153,8 +153,12 @@ struct Bridge::Impl {
   // (or the deadline comes first), rows are computed as goals come, as below.
   void precompute_rows(Clock::time_point deadline) {
     const auto& cells = grid.free_cells();
-    const size_t need_mb = (cells.size() * planning_dist->row_bytes() >> 20) + 1;
-    if (cells.size() * planning_dist->row_bytes() > planning_dist->budget_bytes()) {
+    if (cells.empty()) return;
+    const size_t before = planning_dist->cached_bytes();
+    planning_dist->row(cells[0]);  // a row's bytes as computed (16 bits when its distances fit)
+    const size_t one = planning_dist->cached_bytes() - before;
+    const size_t need = cells.size() * (one > 0 ? one : planning_dist->row_bytes()), need_mb = (need >> 20) + 1;
+    if (need > planning_dist->budget_bytes()) {
       std::fprintf(stderr,
                    "gdrhcr lorr adapter: the rows of all %zu free cells need %zu MB, more than GDRHCR_DIST_MB %zu: "
                    "rows are computed as goals come\n",

@@ -177,6 +177,12 @@ void DistRow::bfs_rotation(int32_t goal_slot) {
   d.assign(size_t(f) * kNumHeadings, UINT32_MAX);
   if (index_->cost.empty()) unit_rotation(goal_slot, d);
   else weighted_rotation(goal_slot, d);
+  if (!narrow_) {  // the index's bound is loose with step costs: 16 bits do if the distances fit
+    uint32_t most = 0;
+    for (uint32_t v : d)
+      if (v != UINT32_MAX) most = std::max(most, v);
+    narrow_ = most < 0xFFFF;
+  }
   if (narrow_) d16_.assign(size_t(f) + 1, 0xFFFF);
   else d32_.assign(size_t(f) + 1, UINT32_MAX);
   excess_.assign(size_t(f) + 1, 0);

@@ -327,6 +327,33 @@ TEST(DistTable, TrafficCostIsHighestOnTheOnlyDoorAndRotationOnly) {
   EXPECT_TRUE(no_lanes.cost.empty());
 }
 
+// Step costs raise the bound on a distance, so a big open map's index calls for 32-bit rows
+// (22,500 free cells x (3 + 1)); every row's distances fit in 16 bits, and it is kept in 16,
+// its Bellman equations as before. The serpentine's distances pass 65,535: 32 bits.
+TEST(DistTable, RowsWithStepCostsAreSixteenBitsWhenTheirDistancesFit) {
+  const Grid open = Grid::from_rows(std::vector<std::string>(150, std::string(150, '.')));
+  auto ix = std::make_shared<const FreeCellIndex>(open, std::vector<Cell>{}, ActionModel::kRotation,
+                                                  StepCosts{2.0, 0.0});
+  ASSERT_TRUE(ix->wide());
+  const DistRow row(ix, open.cell(75, 75));
+  EXPECT_TRUE(row.narrow());
+  EXPECT_EQ(row.bytes(), sizeof(DistRow) + (open.free_cells().size() + 1) * 3);
+  std::mt19937_64 rng(5);
+  expect_rows_shortest_under_costs(open, ix, rng);
+
+  std::vector<std::string> rows(480, std::string(300, '.'));
+  for (int y = 1; y < 480; y += 2) {
+    rows[y] = std::string(300, '@');
+    rows[y][(y / 2) % 2 ? 0 : 299] = '.';
+  }
+  const Grid serpentine = Grid::from_rows(rows);
+  auto far = std::make_shared<const FreeCellIndex>(serpentine, std::vector<Cell>{}, ActionModel::kRotation,
+                                                   StepCosts{2.0, 0.0});
+  const DistRow long_row(far, serpentine.cell(0, 0));
+  EXPECT_FALSE(long_row.narrow());
+  EXPECT_GT(long_row.at(serpentine.cell(299, 478), kEast), 65535);
+}
+
 // Lane cost (rotation): on shelves with one-cell aisles (lanes east, west, east, west), a move
 // against an aisle's lane costs 1 + 2, so going east along the westbound aisle takes the
 // eastbound one next to it (18 steps with the turns) instead of 11 moves at 3 each; rows stay
