@@ -152,29 +152,19 @@ struct Bridge::Impl {
   // warm-up, and no step spends its budget on the rows of new goals. When they do not all fit
   // (or the deadline comes first), rows are computed as goals come, as below.
   void precompute_rows(Clock::time_point deadline) {
-    const auto& cells = grid.free_cells();
-    if (cells.empty()) return;
-    const size_t before = planning_dist->cached_bytes();
-    planning_dist->row(cells[0]);  // a row's bytes as computed (16 bits when its distances fit)
-    const size_t one = planning_dist->cached_bytes() - before;
-    const size_t need = cells.size() * (one > 0 ? one : planning_dist->row_bytes()), need_mb = (need >> 20) + 1;
-    if (need > planning_dist->budget_bytes()) {
+    const auto t0 = Clock::now();
+    const auto all = planning_dist->prefetch_all(deadline);
+    const size_t cells = grid.free_cells().size(), mb = (all.bytes >> 20) + 1;
+    if (!all.fit) {
       std::fprintf(stderr,
                    "gdrhcr lorr adapter: the rows of all %zu free cells need %zu MB, more than GDRHCR_DIST_MB %zu: "
                    "rows are computed as goals come\n",
-                   cells.size(), need_mb, planning_dist->budget_bytes() >> 20);
+                   cells, mb, planning_dist->budget_bytes() >> 20);
       return;
     }
-    const auto t0 = Clock::now();
-    size_t done = 0;
-    while (done < cells.size() && Clock::now() < deadline) {
-      const size_t end = std::min(cells.size(), done + kPrecomputeBatch);
-      planning_dist->prefetch(std::vector<Cell>(cells.begin() + done, cells.begin() + end));
-      done = end;
-    }
-    stats.rows_precomputed = planning_dist->cached_rows();
+    stats.rows_precomputed = all.computed;
     std::fprintf(stderr, "gdrhcr lorr adapter: %zu of %zu rows computed before the first step (%zu MB) in %.1f s\n",
-                 done, cells.size(), need_mb, std::chrono::duration<double>(Clock::now() - t0).count());
+                 all.computed, cells, mb, std::chrono::duration<double>(Clock::now() - t0).count());
   }
 
   // The distance rows of the agents' goals (current ones first, then those revealed ahead),
@@ -250,7 +240,6 @@ struct Bridge::Impl {
   static constexpr double kPlannerShare = 0.93;  // of the budget, for GD-RHCR's step-budget
   static constexpr double kOverrunDecay = 0.99;  // per step, of the overrun remembered
   static constexpr int kRowBatch = 2;  // rows computed at once: one row's time on two cores
-  static constexpr size_t kPrecomputeBatch = 256;  // rows per batch before the first step
   static constexpr double kRowsShare = 0.8;  // of the preprocessing limit, until the rows stop
   double overrun_s = 0;  // how far the planner's steps ran past their budget lately
   double batch_s = 0;    // the slowest batch of rows lately (decaying by kOverrunDecay a batch)

@@ -5,6 +5,7 @@
 //
 // Planner parameters (--H, --alpha, --V, ...) are read against the planner's parameter table
 // (planner_params.hpp); `--list-params` prints it with the values in force for the map and fleet.
+#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -48,6 +49,10 @@ const char* kUsage =
     "  --distinct-goals 0|1 1: never hand out a goal another agent holds (redrawn; with\n"
     "                      --lookahead 1, LLLG's rule: not another agent's current goal)\n"
     "  --dist-budget-mb N  memory budget of the distance-table cache (default 256)\n"
+    "  --all-rows 0|1      1: before the first step, every free cell's distance row when they all\n"
+    "                      fit in --dist-budget-mb (as the Start-Kit adapter does in its\n"
+    "                      preprocessing phase; the result's all_rows records the time), so no\n"
+    "                      step computes a row (default 0)\n"
     "  --out FILE          write the result JSON here (default: standard output)\n"
     "  --paths FILE        write executed paths, one line per agent: 'i: (x,y),(x,y),...'\n"
     "  --quiet             no summary on standard error\n"
@@ -133,6 +138,7 @@ struct RunOptions {
   int agents = 100, steps = 500, lookahead = 3, budget_mb = 256;
   uint64_t seed = 0;
   bool distinct_goals = false;
+  bool all_rows = false;
   ActionModel action_model = ActionModel::kMapf;
   TurnPlanning turns = TurnPlanning::kNative;
   std::unique_ptr<LorrProblem> lorr;
@@ -172,6 +178,7 @@ RunOptions read_options(Params& args) {
   o.seed = args.get_u64("seed", 0);
   o.lookahead = args.get_int("lookahead", o.lorr ? o.lorr->num_tasks_reveal : 3, 1, 1000);
   o.budget_mb = args.get_int("dist-budget-mb", 256, 1, 1 << 20);
+  o.all_rows = args.get_int("all-rows", 0, 0, 1) == 1;
   o.distinct_goals = args.get_int("distinct-goals", 0, 0, 1) == 1;
   o.out_path = args.get_string("out", "");
   o.paths_path = args.get_string("paths", "");
@@ -229,6 +236,7 @@ nlohmann::json result_json(const RunOptions& o, const SimResult& r, const Planne
   params["action_model"] = action_model_name(o.action_model);
   if (o.action_model == ActionModel::kRotation) params["turns"] = turn_planning_name(o.turns);
   params["dist_budget_mb"] = o.budget_mb;
+  params["all_rows"] = o.all_rows;
   j["params"] = params;
   for (auto& v : values.values()) j["param_sources"][v.spec->name] = v.source;
   j["stats"] = planner.stats();
@@ -287,6 +295,16 @@ int run(Params& args, const Flags& flags) {
     return 0;
   }
   DistTable dist(grid, o.action_model, size_t(o.budget_mb) << 20, step_costs(values, o.action_model));
+  nlohmann::json all_rows_record;
+  if (o.all_rows) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto all = dist.prefetch_all();
+    all_rows_record = {{"fit", all.fit}, {"bytes", all.bytes}, {"rows", all.computed},
+                       {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()}};
+    if (!all.fit)
+      std::fprintf(stderr, "gdrhcr_sim: --all-rows: every free cell's row needs %zu MB, more than --dist-budget-mb %d\n",
+                   (all.bytes >> 20) + 1, o.budget_mb);
+  }
   nlohmann::json task_info;
   TaskListStream* task_list = nullptr;
   std::unique_ptr<TaskStream> tasks = make_tasks(o, grid, task_info, task_list);
@@ -311,6 +329,7 @@ int run(Params& args, const Flags& flags) {
                lorr_output(grid, r.paths, recorded.goals(), o.lookahead, ids, rotation ? &r.headings : nullptr).dump() + "\n");
   }
   nlohmann::json result = result_json(o, r, *planner, values, task_info, dist);
+  if (!all_rows_record.is_null()) result["all_rows"] = all_rows_record;
   if (!prep_record.is_null()) {
     result["prep"] = prep_record;
     if (prep_record["applied"].get<bool>()) result["param_sources"]["traffic-cost"] = "prep " + o.prep_path;

@@ -381,6 +381,27 @@ void DistTable::prefetch(const std::vector<Cell>& goals) const {
   for (auto& f : fresh) insert_locked(std::move(f), ++clock_);
 }
 
+DistTable::AllRows DistTable::prefetch_all(std::chrono::steady_clock::time_point deadline) const {
+  AllRows all;
+  const auto& cells = grid_.free_cells();
+  if (cells.empty()) return all;
+  const size_t before = cached_bytes();
+  row(cells[0]);
+  const size_t one = cached_bytes() - before;
+  all.bytes = cells.size() * (one > 0 ? one : row_bytes());
+  all.fit = all.bytes <= budget_;
+  if (!all.fit) return all;
+  constexpr size_t kBatch = 256;  // rows per parallel batch, between looks at the deadline
+  size_t done = 0;
+  while (done < cells.size() && std::chrono::steady_clock::now() < deadline) {
+    const size_t end = std::min(cells.size(), done + kBatch);
+    prefetch(std::vector<Cell>(cells.begin() + done, cells.begin() + end));
+    done = end;
+  }
+  all.computed = std::max<size_t>(done, 1);
+  return all;
+}
+
 std::vector<std::shared_ptr<const DistRow>> DistTable::rows(const std::vector<Cell>& goals) const {
   for (Cell g : goals) check_goal(g);
   prefetch(goals);

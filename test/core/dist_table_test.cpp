@@ -131,6 +131,34 @@ TEST(DistTable, NarrowRowsAtTheLimit) {
   EXPECT_EQ((*row)[line.cell(n / 2, 0)], n / 2);
 }
 
+// Every free cell's row before any goal is known, when they all fit: later rows cost no search.
+// When they do not fit, nothing but the measured row is computed; a deadline stops the batches.
+TEST(DistTable, EveryCellsRowWhenTheyAllFit) {
+  const Grid g = Grid::load(std::string(GDRHCR_SOURCE_DIR) + "/maps/random-32-32-20.map");
+  const size_t f = g.free_cells().size();
+  DistTable big(g, ActionModel::kRotation, size_t(64) << 20);
+  const auto all = big.prefetch_all();
+  EXPECT_TRUE(all.fit);
+  EXPECT_EQ(all.computed, f);
+  EXPECT_EQ(big.cached_rows(), f);
+  EXPECT_EQ(big.bfs_count(), f);
+  EXPECT_EQ(all.bytes, big.cached_bytes());
+  for (size_t i = 0; i < f; i += 17) big.row(g.free_cells()[i]);
+  EXPECT_EQ(big.bfs_count(), f) << "no row computed again";
+
+  DistTable small(g, ActionModel::kRotation, all.bytes / 2);
+  const auto half = small.prefetch_all();
+  EXPECT_FALSE(half.fit);
+  EXPECT_EQ(half.computed, 0u);
+  EXPECT_LE(small.bfs_count(), 1u);
+
+  DistTable late(g, ActionModel::kRotation, size_t(64) << 20);
+  const auto cut = late.prefetch_all(std::chrono::steady_clock::now());
+  EXPECT_TRUE(cut.fit);
+  EXPECT_LT(cut.computed, f);
+  EXPECT_EQ(late.cached_rows(), cut.computed);
+}
+
 TEST(DistTable, LazyAndCached) {
   Grid g = Grid::from_rows({"....", "....", "...."});
   DistTable d(g);

@@ -45,6 +45,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -182,6 +183,16 @@ class DistTable {
   // Computes the missing rows among `goals` in parallel (oneTBB), as a batch warm-up. Goals
   // that are not free cells are skipped. Rows are inserted as if queried in the given order.
   void prefetch(const std::vector<Cell>& goals) const;
+  // Every free cell's row, when all of them fit in the budget (measured on one row as
+  // computed: see narrow rows above), in parallel batches until `deadline`: with them at hand
+  // no later step waits for a row, whatever goals come. Returns the rows computed; nothing is
+  // computed when they do not fit (but the one row measured).
+  struct AllRows {
+    bool fit = false;     // every row fits in the budget
+    size_t bytes = 0;     // their bytes, by the measured row
+    size_t computed = 0;  // rows computed before the deadline (all of them when it did not come)
+  };
+  AllRows prefetch_all(std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max()) const;
   // The rows of `goals` (same order), missing ones computed in parallel. Throws like row().
   std::vector<std::shared_ptr<const DistRow>> rows(const std::vector<Cell>& goals) const;
 
