@@ -72,6 +72,8 @@ Grid grid_of(int rows, int cols, const std::vector<int>& map) {
   return Grid::from_rows(lines, "lorr-start-kit");
 }
 
+constexpr double kPlannerShare = 0.93;  // of our budget, for GD-RHCR's step-budget (and in trials)
+
 // The Start-Kit's `enum Action {FW, CR, CCR, W, NA}` values.
 constexpr int kStartKitWait = 3;
 int start_kit_action(Action a) {
@@ -237,7 +239,6 @@ struct Bridge::Impl {
                       ActionModel::kRotation);
   }
 
-  static constexpr double kPlannerShare = 0.93;  // of the budget, for GD-RHCR's step-budget
   static constexpr double kOverrunDecay = 0.99;  // per step, of the overrun remembered
   static constexpr int kRowBatch = 2;  // rows computed at once: one row's time on two cores
   static constexpr double kRowsShare = 0.8;  // of the preprocessing limit, until the rows stop
@@ -285,6 +286,8 @@ BridgeOptions with_prep(BridgeOptions o, const Grid& grid, int n) {
     for (auto& [k, v] : o.params) po.given.set(k, v);
     po.seed = o.seed;
     po.dist_budget_mb = o.dist_budget_mb;
+    if (o.budget_ms > 0 && planner_has_param(o.planner, "step-budget"))  // trials at the run's budget
+      po.step_budget_s = kPlannerShare * o.budget_ms / 1000;
     po.time_limit_s = o.preprocess_s > 0 ? std::min(o.preprocess_s / 3, kPrepMaxSeconds) : kPrepMaxSeconds;
     prep = prepare_map(grid, po);
     try {
@@ -364,7 +367,7 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
   const auto t_plan = Clock::now();
   if (capped) {
     const double used = std::chrono::duration<double>(t_plan - t0).count();
-    const double share = Impl::kPlannerShare * m.options.budget_ms / 1000.0;
+    const double share = kPlannerShare * m.options.budget_ms / 1000.0;
     view.step_budget_s = std::max(share / 10, share - used - m.overrun_s);
   }
   const uint64_t rows_before = m.planning_dist->bfs_count();

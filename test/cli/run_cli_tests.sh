@@ -235,7 +235,7 @@ if "$sim" --map "$m" --planner gd-rhcr --agents 40 --steps 30 --seed 1 --action-
    /usr/bin/python3 - "$tmp/prep.json" "$tmp/prepped.json" <<'PY'
 import json, sys
 prep, r = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
-assert prep["format"] == "gdrhcr-prep/1" and prep["agents"] == 40 and len(prep["trials"]) == 4, prep
+assert prep["format"] == "gdrhcr-prep/2" and prep["agents"] == 40 and len(prep["trials"]) == 6, prep
 assert prep["traffic_cost"] in [t["traffic_cost"] for t in prep["trials"]], prep
 assert r["prep"]["applied"] and r["params"]["traffic_cost"] == prep["traffic_cost"], r["prep"]
 assert r["param_sources"]["traffic-cost"].startswith("prep "), r["param_sources"]["traffic-cost"]

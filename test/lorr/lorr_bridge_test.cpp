@@ -5,7 +5,10 @@
 #include "lorr_bridge.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
+#include <filesystem>
+#include <fstream>
 #include <set>
 #include <string>
 #include <vector>
@@ -119,6 +122,30 @@ TEST(LorrBridge, HoweverShortTheBudgetRowsKeepComingAndTheWarmUpEnds) {
   EXPECT_LT(s.warm_up_steps, 15) << "the 20 goals' rows, a batch per step";
   EXPECT_GE(s.rows_before_planning, static_cast<uint64_t>(SmallFleet::n));
   EXPECT_EQ(s.rows_in_planner, 0u);
+}
+
+// The preparation (GDRHCR_PREP_DIR) runs its trials as the run will plan: at the planner's share
+// of the budget, so the anytime search runs in them; every candidate cost on two seeds. A short
+// preprocessing limit keeps the trials short.
+TEST(LorrBridge, ThePreparationsTrialsRunAtTheRunsBudget) {
+  SmallFleet f;
+  const std::string dir = ::testing::TempDir() + "lorr_prep_budget";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  BridgeOptions o;
+  o.budget_ms = 100;
+  o.prep_dir = dir;
+  o.preprocess_s = 3;
+  Bridge bridge(f.g.height(), f.g.width(), start_kit_map(f.g), f.n, o);
+  std::vector<std::filesystem::path> files;
+  for (auto& e : std::filesystem::directory_iterator(dir)) files.push_back(e.path());
+  ASSERT_EQ(files.size(), 1u);
+  std::ifstream in(files[0]);
+  const auto prep = nlohmann::json::parse(in);
+  EXPECT_NEAR(prep.at("step_budget_s").get<double>(), 0.093, 1e-9);
+  EXPECT_EQ(prep.at("trials").size(), 6u) << "traffic costs 0, 1 and 2 on two seeds";
+  EXPECT_GT(f.run(bridge, 0, 5), 0);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(LorrBridge, ARowTheTableEvictedIsComputedAgainBeforeThePlannersStep) {

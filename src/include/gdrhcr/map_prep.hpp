@@ -8,7 +8,9 @@
 // the loop, preparation runs the planner on the map itself, with the fleet's size and random
 // goals, once per candidate cost and seed, and keeps the one that reaches the most goals over the
 // seeds. The first candidate (none) is kept unless another beats it by kMargin, so noise does not
-// switch it. A crowded fleet (rule crowded-fleet, planner_params.hpp) tries every candidate too:
+// switch it. Trials run the planner as the run will: with the run's step budget when it has one,
+// since the anytime search (window_lns.hpp) runs only with a budget and changes which cost wins
+// (Paris: 2 without the search, 1 with it). A crowded fleet (rule crowded-fleet, planner_params.hpp) tries every candidate too:
 // once PIBT's configurations are carried out to the end, its trials are no longer noise.
 // The League's Start-Kit gives a preprocessing phase for such work (the LoRR adapter runs it
 // there, lorr_bridge.hpp); the ROS node and gdrhcr_sim load a file made by
@@ -44,11 +46,11 @@ struct PrepOptions {
   ActionModel model = ActionModel::kRotation;
   std::string planner = "gd-rhcr";
   Params given;                               // the planner's parameters besides the tuned ones
-  std::vector<double> traffic_costs{0, 2};    // candidates; the first is the fallback
+  std::vector<double> traffic_costs{0, 1, 2};  // candidates; the first is the fallback
   int steps = 1500;                           // per trial: long enough for a long run's jams
   int seeds = 2;                              // trials per candidate: seeds seed, seed + 1, ...
-  double step_budget_s = 0;                   // the planner's step budget in trials (0 = none:
-                                              //   trials then repeat exactly, whatever the load)
+  double step_budget_s = 0;                   // the planner's step budget in trials, the run's
+                                              //   (0 = none: trials then repeat exactly)
   double time_limit_s = 0;                    // > 0: the first trial stops at its share of it,
                                               //   and the others run as many steps
   uint64_t seed = 1;
@@ -64,7 +66,7 @@ struct PrepTrial {
 };
 
 struct MapPrep {
-  static constexpr const char* kFormat = "gdrhcr-prep/1";
+  static constexpr const char* kFormat = "gdrhcr-prep/2";  // 2: candidates 0, 1, 2, trials at the run's budget
   static constexpr double kMargin = 0.05;  // a candidate replaces the first one if 5% better
   std::string map_key;
   int width = 0, height = 0, agents = 0;
