@@ -26,14 +26,14 @@ namespace gdrhcr_lorr {
 //   GDRHCR_DIST_MB    memory for distance rows (default 8192). When the rows of all the map's
 //                     free cells fit in it, they are computed in the Start-Kit's preprocessing
 //                     phase (within 80% of its limit): no step then waits for a row. Paris_1_256
-//                     (47,024 free cells, 141 KB a rotation row) needs 6.4 GB, LoRR's
+//                     (47,240 free cells, 142 KB a rotation row) needs 6.4 GB, LoRR's
 //                     warehouse_large 4.3 GB; a smaller value keeps rows to the goals in use
 //   GDRHCR_PREP_DIR   offline preparation (gdrhcr/map_prep.hpp) cached in this directory: in the
 //                     Start-Kit's preprocessing phase the adapter loads the file for this map,
-//                     fleet size and model, or makes it (trials of at most a third of the
-//                     preprocessing limit, and 10 minutes) and writes it there; its traffic
-//                     cost applies unless GDRHCR_PARAMS sets one. Unset: no preparation. A bad
-//                     file is reported on standard error and made again
+//                     fleet size and model, or makes it (trials at the run's budget, of at
+//                     most a third of the preprocessing limit and 10 minutes) and writes it
+//                     there; its traffic cost applies unless GDRHCR_PARAMS sets one. Unset:
+//                     no preparation. A bad file is reported on standard error and made again
 //   GDRHCR_TURNS      mapf-wait (the planner's mapf steps with turns and waits,
 //                     gdrhcr::MapfInRotation) or native (its own rotation planning); default
 //                     gdrhcr::kLorrTurnPlanning

@@ -59,8 +59,9 @@ print(f"lorr_test: OK: AllValid Yes, no errors, {r['numTaskFinished']} tasks fin
       "gdrhcr_sim --lorr-problem writes the same output")
 PY
 
-# With a budget of our own (100 ms per step, far below the Start-Kit's 1 s): the distance rows'
-# warm-up, then planning within the budget; still valid, and tasks are finished.
+# With a budget of our own (100 ms per step, far below the Start-Kit's 1 s): every cell's distance
+# row in the preprocessing phase, then planning within the budget; still valid, and tasks are
+# finished.
 bash "$top/scripts/bench_lorr.sh" "$kit" "$instance" 60 "$tmp/capped.json" 100 2>"$tmp/capped.err" >/dev/null ||
   { cat "$tmp/capped.err"; echo "lorr_test: FAIL: the run with a 100 ms budget"; exit 1; }
 /usr/bin/python3 - "$tmp/capped.json" "$tmp/capped.times" <<'PY' || exit 1

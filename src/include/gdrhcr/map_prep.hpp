@@ -10,8 +10,9 @@
 // seeds. The first candidate (none) is kept unless another beats it by kMargin, so noise does not
 // switch it. Trials run the planner as the run will: with the run's step budget when it has one,
 // since the anytime search (window_lns.hpp) runs only with a budget and changes which cost wins
-// (Paris: 2 without the search, 1 with it). A crowded fleet (rule crowded-fleet, planner_params.hpp) tries every candidate too:
-// once PIBT's configurations are carried out to the end, its trials are no longer noise.
+// (Paris: 2 without the search, 1 with it). A crowded fleet (rule crowded-fleet,
+// planner_params.hpp) tries every candidate too: once PIBT's configurations are carried out to
+// the end, its trials are no longer noise.
 // The League's Start-Kit gives a preprocessing phase for such work (the LoRR adapter runs it
 // there, lorr_bridge.hpp); the ROS node and gdrhcr_sim load a file made by
 // `gdrhcr_sim --prepare`.
