@@ -335,14 +335,15 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
     m.headings[i] = static_cast<Heading>(headings[i]);
   }
   actions.assign(n, kStartKitWait);
-  // Rows first, within half our budget (30% of the Start-Kit's limit without one; a batch of rows
-  // is begun only if one like the slowest lately would end in time); agents whose goal rows are
-  // not ready keep their last goal; the planner gets what is left of 90% of the budget. While
-  // some agent has had no goal with a row yet (the first steps of a fleet of thousands: 10,000
-  // rows take seconds), the step is all waits (valid) and rows get 90% of our budget (30% of the
-  // Start-Kit's limit without one): the warm-up is paid once, in the first steps, and with a
-  // budget it keeps the budget too; the step that completes it is still all waits, as the rows
-  // leave the planner no time.
+  // Rows first (none to compute when every cell's row was computed beforehand), within half our
+  // budget (30% of the Start-Kit's limit without one; a batch of rows is begun only if one like
+  // the slowest lately would end in time); agents whose goal rows are not ready keep their last
+  // goal; the planner gets what is left of kPlannerShare of the budget. While some agent has had
+  // no goal with a row yet (the first steps of a fleet of thousands: 10,000 rows take seconds),
+  // the step is all waits (valid) and rows get 90% of our budget (30% of the Start-Kit's limit
+  // without one): the warm-up is paid once, in the first steps, and with a budget it keeps the
+  // budget too; the step that completes it is still all waits, as the rows leave the planner no
+  // time (a first step that computed no row plans).
   const auto limit = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(time_limit_s));
   const auto budget = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(m.options.budget_ms));
   const bool capped = m.options.budget_ms > 0 && budget < limit;

@@ -15,8 +15,9 @@ namespace gdrhcr_lorr {
 //   GDRHCR_PLANNER    a name of gdrhcr::make_planner (default gd-rhcr)
 //   GDRHCR_PARAMS     its parameters as on gdrhcr_sim's command line, e.g. "--H 10 --V 3";
 //                     GD-RHCR's threads are the machine's cores unless it sets them
-//   GDRHCR_BUDGET_MS  our time per step in ms (0 = none), distance rows included: the rows of
-//                     new goals get up to half of it (an agent whose goal has no row yet keeps
+//   GDRHCR_BUDGET_MS  our time per step in ms (0 = none), distance rows included: unless every
+//                     cell's row was computed beforehand (GDRHCR_DIST_MB), the rows of new
+//                     goals get up to half of it (an agent whose goal has no row yet keeps
 //                     its last goal; the first steps, until every agent had one, are all waits
 //                     with 90% of the budget for rows), GD-RHCR's step-budget is 93% of it,
 //                     less the rows' time, and RHCR's PBS timeout all of it, unless
@@ -71,8 +72,8 @@ class Bridge {
   // One timestep within the Start-Kit's time_limit_s: locations and headings (0 east, 1 south,
   // 2 west, 3 north) of every agent and its revealed goal locations, current one first (empty:
   // no task). actions[i] gets the Start-Kit's Action value (0 FW, 1 CR, 2 CCR, 3 W). The
-  // distance rows of new goals are computed first, within half the budget (30% of the limit
-  // without one); an agent whose goal has no row yet keeps its last goal, and a step where some
+  // distance rows of new goals, if not all computed beforehand (GDRHCR_DIST_MB), are computed
+  // first, within half the budget (30% of the limit without one); an agent whose goal has no row yet keeps its last goal, and a step where some
   // agent has none at all (the first of a fleet of thousands) is all waits, its rows within 90%
   // of the budget. A step that runs over the budget is reported on stderr with its phases.
   void plan(int timestep, double time_limit_s, const std::vector<int>& locations, const std::vector<int>& headings,
