@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -88,6 +89,21 @@ int start_kit_action(Action a) {
 
 }  // namespace
 
+int default_dist_budget_mb(uint64_t available_mb) {
+  if (available_mb == 0) return kDistBudgetMb;
+  return static_cast<int>(std::clamp<uint64_t>(available_mb * 3 / 4, 1, kDistBudgetMb));
+}
+
+uint64_t available_memory_mb() {
+  std::ifstream in("/proc/meminfo");
+  for (std::string key; in >> key;) {
+    uint64_t kb = 0;
+    if (key == "MemAvailable:" && in >> kb) return kb >> 10;
+    in.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
+  }
+  return 0;
+}
+
 BridgeOptions bridge_options_from_env() {
   BridgeOptions o;
   o.planner = env_or("GDRHCR_PLANNER", o.planner);
@@ -95,7 +111,8 @@ BridgeOptions bridge_options_from_env() {
   o.budget_ms = env_number("GDRHCR_BUDGET_MS", 0);
   o.times_out = env_or("GDRHCR_TIMES_OUT", "");
   o.seed = static_cast<uint64_t>(env_number("GDRHCR_SEED", 0));
-  o.dist_budget_mb = static_cast<int>(env_number("GDRHCR_DIST_MB", o.dist_budget_mb));
+  const double dist_mb = env_number("GDRHCR_DIST_MB", -1);
+  o.dist_budget_mb = dist_mb < 0 ? default_dist_budget_mb(available_memory_mb()) : static_cast<int>(dist_mb);
   o.prep_dir = env_or("GDRHCR_PREP_DIR", "");
   if (o.dist_budget_mb < 1) throw std::invalid_argument("GDRHCR_DIST_MB must be at least 1");
   try {
@@ -132,8 +149,9 @@ struct Bridge::Impl {
       planner = make_planner(values, grid, n, o.seed, ActionModel::kRotation);
       planning_dist = &dist;
     }
-    std::fprintf(stderr, "gdrhcr lorr adapter: planner %s, turns %s, budget %g ms, threads %d\n", o.planner.c_str(),
-                 turn_planning_name(turns), o.budget_ms, o.planner == "gd-rhcr" ? values.integer("threads") : 1);
+    std::fprintf(stderr, "gdrhcr lorr adapter: planner %s, turns %s, budget %g ms, threads %d, distance rows %d MB\n",
+                 o.planner.c_str(), turn_planning_name(turns), o.budget_ms,
+                 o.planner == "gd-rhcr" ? values.integer("threads") : 1, o.dist_budget_mb);
     if (!o.times_out.empty() && !(times = std::fopen(o.times_out.c_str(), "w")))
       throw std::invalid_argument("GDRHCR_TIMES_OUT: cannot write " + o.times_out);
     precompute_rows(o.preprocess_s > 0 ? started + std::chrono::duration_cast<Clock::duration>(

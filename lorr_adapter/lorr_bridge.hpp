@@ -24,11 +24,13 @@ namespace gdrhcr_lorr {
 //                     GDRHCR_PARAMS sets them
 //   GDRHCR_TIMES_OUT  a file that gets our time per step in ms, one line per step (optional)
 //   GDRHCR_SEED       seed for the planner's tie-breaks (default 0)
-//   GDRHCR_DIST_MB    memory for distance rows (default 8192). When the rows of all the map's
-//                     free cells fit in it, they are computed in the Start-Kit's preprocessing
-//                     phase (within 80% of its limit): no step then waits for a row. Paris_1_256
-//                     (47,240 free cells, 142 KB a rotation row) needs 6.4 GB, LoRR's
-//                     warehouse_large 4.3 GB; a smaller value keeps rows to the goals in use
+//   GDRHCR_DIST_MB    memory for distance rows (default 8192, or three quarters of the memory
+//                     the machine has available at start-up when that is less:
+//                     default_dist_budget_mb). When the rows of all the map's free cells fit in
+//                     it, they are computed in the Start-Kit's preprocessing phase (within 80% of
+//                     its limit): no step then waits for a row. Paris_1_256 (47,240 free cells,
+//                     142 KB a rotation row) needs 6.4 GB, LoRR's warehouse_large 4.3 GB; a
+//                     smaller value keeps rows to the goals in use
 //   GDRHCR_PREP_DIR   offline preparation (gdrhcr/map_prep.hpp) cached in this directory: in the
 //                     Start-Kit's preprocessing phase the adapter loads the file for this map,
 //                     fleet size and model, or makes it (trials at the run's budget, of at
@@ -38,6 +40,7 @@ namespace gdrhcr_lorr {
 //   GDRHCR_TURNS      mapf-wait (the planner's mapf steps with turns and waits,
 //                     gdrhcr::MapfInRotation) or native (its own rotation planning); default
 //                     gdrhcr::kLorrTurnPlanning
+constexpr int kDistBudgetMb = 8192;  // GDRHCR_DIST_MB's default where the memory allows
 struct BridgeOptions {
   std::string planner = "gd-rhcr";
   std::vector<std::pair<std::string, std::string>> params;
@@ -45,12 +48,20 @@ struct BridgeOptions {
   std::string times_out;  // where our time per step goes (empty: nowhere)
   uint64_t seed = 0;
   std::string turns;  // "native" or "mapf-wait"; empty = gdrhcr::kLorrTurnPlanning
-  int dist_budget_mb = 8192;
+  int dist_budget_mb = kDistBudgetMb;
   std::string prep_dir;     // GDRHCR_PREP_DIR; empty = no offline preparation
   double preprocess_s = 0;  // the Start-Kit's preprocessing limit (0 = none given)
 };
 // Throws std::invalid_argument naming the variable for a malformed value.
 BridgeOptions bridge_options_from_env();
+
+// GDRHCR_DIST_MB when it is not set: kDistBudgetMb, or three quarters of `available_mb` (the
+// memory the machine has available; 0 = unknown) when that is less, at least 1. So a machine
+// with less memory than every cell's row needs computes rows as goals come instead of running
+// out of memory.
+int default_dist_budget_mb(uint64_t available_mb);
+// MemAvailable in /proc/meminfo, in MB; 0 when it cannot be read.
+uint64_t available_memory_mb();
 
 // What the bridge did so far, for tests and reports.
 struct BridgeStats {

@@ -7,9 +7,12 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -169,6 +172,35 @@ TEST(LorrBridge, ARowTheTableEvictedIsComputedAgainBeforeThePlannersStep) {
   EXPECT_GT(s.evictions, 0u);
   EXPECT_GT(s.rows_before_planning, static_cast<uint64_t>(distinct)) << "evicted rows computed again";
   EXPECT_EQ(s.rows_in_planner, 0u);
+}
+
+// The rows' memory: unset, GDRHCR_DIST_MB keeps to three quarters of the memory available, so a
+// machine without the 6.4 GB of Paris's rows computes rows as goals come instead of running out
+// of memory; set, it is what it says, and nonsense is named.
+TEST(LorrBridge, TheRowsMemoryKeepsWithinTheMemoryAvailableUnlessGiven) {
+  using gdrhcr_lorr::default_dist_budget_mb;
+  using gdrhcr_lorr::kDistBudgetMb;
+  EXPECT_EQ(default_dist_budget_mb(0), kDistBudgetMb) << "memory unknown";
+  EXPECT_EQ(default_dist_budget_mb(4000), 3000);
+  EXPECT_EQ(default_dist_budget_mb(uint64_t(64) << 10), kDistBudgetMb);
+  EXPECT_EQ(default_dist_budget_mb(1), 1);
+  const uint64_t available = gdrhcr_lorr::available_memory_mb();
+  EXPECT_GT(available, 0u) << "MemAvailable from /proc/meminfo";
+  unsetenv("GDRHCR_DIST_MB");
+  const int chosen = gdrhcr_lorr::bridge_options_from_env().dist_budget_mb;
+  EXPECT_GE(chosen, 1);
+  EXPECT_LE(chosen, kDistBudgetMb);
+  EXPECT_LE(uint64_t(chosen), std::max<uint64_t>(1, available * 3 / 4 + 64)) << "within the memory available";
+  setenv("GDRHCR_DIST_MB", "100", 1);
+  EXPECT_EQ(gdrhcr_lorr::bridge_options_from_env().dist_budget_mb, 100);
+  setenv("GDRHCR_DIST_MB", "lots", 1);
+  try {
+    gdrhcr_lorr::bridge_options_from_env();
+    ADD_FAILURE() << "GDRHCR_DIST_MB=lots accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("GDRHCR_DIST_MB"), std::string::npos) << e.what();
+  }
+  unsetenv("GDRHCR_DIST_MB");
 }
 
 }  // namespace
