@@ -84,9 +84,10 @@ class Bridge {
   // 2 west, 3 north) of every agent and its revealed goal locations, current one first (empty:
   // no task). actions[i] gets the Start-Kit's Action value (0 FW, 1 CR, 2 CCR, 3 W). The
   // distance rows of new goals, if not all computed beforehand (GDRHCR_DIST_MB), are computed
-  // first, within half the budget (30% of the limit without one); an agent whose goal has no row yet keeps its last goal, and a step where some
-  // agent has none at all (the first of a fleet of thousands) is all waits, its rows within 90%
-  // of the budget. A step that runs over the budget is reported on stderr with its phases.
+  // first, within half the budget (30% of the limit without one); an agent whose goal has no
+  // row yet keeps its last goal, and a step where some agent has none at all (the first of a
+  // fleet of thousands) is all waits, its rows within 90% of the budget. A step that runs over
+  // the budget is reported on stderr with its phases.
   void plan(int timestep, double time_limit_s, const std::vector<int>& locations, const std::vector<int>& headings,
             const std::vector<std::vector<int>>& goals, std::vector<int>& actions);
   BridgeStats stats() const;
