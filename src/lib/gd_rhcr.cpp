@@ -268,7 +268,7 @@ void GdRhcrPlanner::move_agents(const WorldView& world, StepWork& work, std::vec
   for (auto& info : last_groups_) threshold_fallbacks_ += info.action == GroupAction::ThresholdFallback;
 }
 
-// The final check; agents it re-moved and the secondary solver's agents get one-step plans, so
+// The final check; agents it re-moved and the secondary solver's agents are left without a plan, so
 // they are reconsidered (and maybe handed back to the primary solver) at the next step; then the
 // secondary agents' motion forecast for the next step's guidance.
 void GdRhcrPlanner::merge_and_repair(const WorldView& world, StepWork& work, std::vector<Cell>& next) {
@@ -279,7 +279,7 @@ void GdRhcrPlanner::merge_and_repair(const WorldView& world, StepWork& work, std
     for (auto& info : last_groups_)
       if (repaired[info.agents[0]]) info.action = GroupAction::Repair;
   }
-  adopt_one_step_plans(world, work.secondary, next);
+  keep_secondary_steps(world, work.secondary, next);
   if (forecast_ && !work.secondary.empty()) roll_forecast(world, work.secondary, work.on_secondary, next);
 }
 
@@ -307,7 +307,10 @@ std::vector<PlannerGroup> GdRhcrPlanner::groups() const {
 std::vector<Cell> GdRhcrPlanner::planned_path(int agent) const {
   if (agent < 0 || agent >= static_cast<int>(plan_of_.size())) return {};
   const auto& plan = plan_of_[agent];
-  if (!plan) return {};
+  if (!plan) {
+    if (static_cast<size_t>(agent) < step_at_.size() && step_at_[agent] == now_) return {step_from_[agent], step_to_[agent]};
+    return {};
+  }
   const auto& path = plan->paths[slot_of_[agent]];
   const int from = std::clamp(now_ - plan->start_time, 0, static_cast<int>(path.size()) - 1);
   return std::vector<Cell>(path.begin() + from, path.end());
@@ -450,30 +453,18 @@ void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
   }
 }
 
-void GdRhcrPlanner::adopt_one_step_plans(const WorldView& world, const std::vector<int>& agents,
+// The secondary solver's agents (and those the final check re-moved) follow no plan: their
+// groups are replanned at the next step (Algorithm 1's lazy test fails on a missing plan, as it
+// would on an exhausted one-step plan), so only the step itself is kept, for planned_path. No
+// plan object per group: with 10,000 agents making them was a tenth of a step.
+void GdRhcrPlanner::keep_secondary_steps(const WorldView& world, const std::vector<int>& agents,
                                          const std::vector<Cell>& next) {
-  // Each group moved by the secondary solver gets a one-step plan of its own, so it is
-  // reconsidered (and possibly handed back to the primary solver) at the next step.
-  std::vector<int> by_group(agents);
-  std::sort(by_group.begin(), by_group.end(), [&](int a, int b) {
-    return partition_.group_of(a) < partition_.group_of(b);
-  });
-  for (size_t s = 0; s < by_group.size();) {
-    size_t e = s;
-    auto plan = std::make_shared<Plan>();
-    plan->id = next_plan_id_++;
-    plan->start_time = world.timestep;
-    plan->valid_steps = 1;
-    while (e < by_group.size() && partition_.group_of(by_group[e]) == partition_.group_of(by_group[s])) {
-      const int i = by_group[e];
-      slot_of_[i] = static_cast<int>(plan->paths.size());
-      plan->paths.push_back({world.positions[i], next[i]});
-      if (world.rotation()) plan->headings.push_back({(*world.headings)[i], (*world.next_headings)[i]});
-      plan->goals.push_back(world.goals[i]);
-      ++e;
-    }
-    for (size_t k = s; k < e; ++k) plan_of_[by_group[k]] = plan;
-    s = e;
+  if (step_from_.size() != plan_of_.size())
+    step_from_.assign(plan_of_.size(), kNoCell), step_to_.assign(plan_of_.size(), kNoCell),
+        step_at_.assign(plan_of_.size(), -1);
+  for (int i : agents) {
+    plan_of_[i].reset();
+    step_from_[i] = world.positions[i], step_to_[i] = next[i], step_at_[i] = world.timestep;
   }
 }
 

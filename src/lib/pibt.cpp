@@ -268,8 +268,16 @@ void PibtStep::push_all(const WorldView& world, std::vector<Cell>& next,
   if (world.blocked)  // blocked cells (a late robot still leaving them): nobody enters
     for (Cell c : *world.blocked) occupied_next_[c] = kFixed;
   std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) { return priority_[a] > priority_[b]; });
-  for (int i : order_)
-    if (next[i] == kNoCell) push(world, i, -1, next);
+  const bool timed = deadline_ != std::chrono::steady_clock::time_point::max();
+  for (size_t k = 0; k < order_.size(); ++k) {
+    if (timed && k >= kDeadlineStride && k % kDeadlineStride == 0 && std::chrono::steady_clock::now() >= deadline_) {
+      ++deadline_stops_;  // the agents no push has reached keep their cells
+      for (; k < order_.size(); ++k)
+        if (next[order_[k]] == kNoCell) next[order_[k]] = world.positions[order_[k]];
+      break;
+    }
+    if (next[order_[k]] == kNoCell) push(world, order_[k], -1, next);
+  }
   // Reset the scratch tables touched this call, so the next call starts clean in O(agents).
   for (int i : order_) {
     occupied_now_[world.positions[i]] = kFree;

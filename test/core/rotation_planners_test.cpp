@@ -208,6 +208,39 @@ TEST(RotationPlanners, OperationsStopAtTheStepBudgetAndTheOthersWait) {
   }
 }
 
+TEST(RotationPlanners, CellsStopAtTheStepBudgetAndTheOthersWait) {
+  // PIBT over cells with a budget nothing fits in: every call stops after its first
+  // kDeadlineStride agents (and the agents they push), the rest wait, every step stays valid and
+  // the stops are counted. The fleet still moves, less than without a budget.
+  const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+  DistTable dist(g, ActionModel::kRotation);
+  const int n = 300;
+  const auto starts = random_starts(g, n, 3);
+  SimOptions opt;
+  opt.steps = 15;
+  opt.record_paths = true;
+  opt.action_model = ActionModel::kRotation;
+  long moves[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    const char* budget = k == 0 ? "1e-9" : "0";
+    SCOPED_TRACE(std::string("step-budget ") + budget);
+    Params p;
+    p.set("rotation-pibt", "cells");
+    p.set("step-budget", budget);
+    auto planner = make_planner("gd-rhcr", p, g, n, 3, ActionModel::kRotation);
+    RandomNavigationStream tasks(g, 3);
+    const SimResult r = run_simulation(g, dist, tasks, *planner, starts, opt);
+    EXPECT_EQ(r.collisions, 0);
+    for (const auto& path : r.paths)
+      for (size_t t = 1; t < path.size(); ++t) moves[k] += path[t] != path[t - 1];
+    const long stops = planner->stats()["secondary_deadline_stops"].get<long>();
+    if (k == 0) EXPECT_GE(stops, opt.steps);
+    else EXPECT_EQ(stops, 0);
+  }
+  EXPECT_GT(moves[0], 0) << "the first agents of every call still move";
+  EXPECT_LT(moves[0] * 2, moves[1]) << "with a budget nothing fits in, most agents wait";
+}
+
 namespace {
 // One step of `planner` in the rotation model at timestep t, validated; advances pos and heads.
 // False (and a test failure) when the step is not valid.

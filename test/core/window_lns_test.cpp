@@ -10,6 +10,7 @@
 #include "gdrhcr/planner.hpp"
 #include "gdrhcr/simulator.hpp"
 #include "gdrhcr/task_stream.hpp"
+#include "gdrhcr/validator.hpp"
 #include "gdrhcr/window_lns.hpp"
 
 using namespace gdrhcr;
@@ -271,6 +272,69 @@ TEST(WindowLns, WithoutABudgetItIsThePlannerBeneath) {
     }
     EXPECT_GT(compared, 0) << "GD-RHCR named no next cell at all";
   }
+}
+
+// A budget too short for the planner beneath and two rollout steps: the first step (nothing measured
+// yet) begins a rollout, which is cut at the stop; from then on no rollout is begun, the planner
+// beneath gets the whole budget, and every step is valid.
+TEST(WindowLns, NoRolloutIsBegunThatCouldNotEndBeforeTheStop) {
+  const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+  const int n = 150, steps = 20;
+  DistTable dist(g, ActionModel::kRotation);
+  RandomNavigationStream tasks(g, 6);
+  Params params;
+  params.set("lns-window", "8");
+  params.set("step-budget", "1e-9");
+  auto planner = make_planner("gd-rhcr", params, g, n, 6, ActionModel::kRotation);
+  ASSERT_NE(dynamic_cast<WindowLns*>(planner.get()), nullptr);
+  SimOptions opt;
+  opt.steps = steps;
+  opt.action_model = ActionModel::kRotation;
+  const SimResult r = run_simulation(g, dist, tasks, *planner, random_starts(g, n, 6), opt);
+  EXPECT_EQ(r.collisions, 0);
+  const auto stats = planner->stats();
+  EXPECT_EQ(stats["lns_steps"].get<long>(), 0);
+  EXPECT_EQ(stats["lns_steps_cut"].get<long>(), 1);
+  EXPECT_EQ(stats["lns_steps_skipped"].get<long>(), steps - 1);
+  EXPECT_GT(stats["lns_rollout_step_ms"].get<double>(), 0);
+}
+
+// With a budget, the rollout takes as many steps as fit (at most the window): whatever window a
+// step chose, the plan it holds is conflict-free, made of the model's actions, and executed.
+TEST(WindowLns, UnderABudgetEachHeldPlanIsValidWhateverItsWindow) {
+  const Grid g = Grid::load(repo("maps/warehouse-10-20-10-2-1.map"));
+  const int n = 400, window = 10;
+  Fleet fleet(g, ActionModel::kRotation, n, 2);
+  Params params;
+  params.set("lns-window", std::to_string(window));
+  params.set("step-budget", "0.03");
+  auto planner = make_planner("gd-rhcr", params, g, n, 2, ActionModel::kRotation);
+  auto& lns = dynamic_cast<WindowLns&>(*planner);
+  int held = 0;
+  for (int t = 0; t < 12; ++t) {
+    WorldView world{g, fleet.dist, t, fleet.pos, fleet.goals};
+    world.action_model = ActionModel::kRotation;
+    world.headings = &fleet.heads, world.next_headings = &fleet.next_heads;
+    std::vector<Cell> next(n);
+    planner->plan_step(world, next);
+    const auto& plan = lns.plan();
+    if (!plan.empty()) {
+      ++held;
+      const int w = static_cast<int>(plan[0].size()) - 1;
+      EXPECT_GE(w, 2);
+      EXPECT_LE(w, window);
+      check_plan(lns, world, w);
+      for (int i = 0; i < n; ++i) EXPECT_EQ(next[i], plan[i][1].cell);
+    }
+    StepValidator v(g, ActionModel::kRotation);
+    const auto bad = v.check(fleet.pos, next, &fleet.heads, &fleet.next_heads);
+    ASSERT_FALSE(bad) << bad->describe(g, t);
+    for (int i = 0; i < n; ++i) {
+      fleet.pos[i] = next[i], fleet.heads[i] = fleet.next_heads[i];
+      if (fleet.pos[i] == fleet.goals[i][0]) fleet.goals[i] = {fleet.tasks.next_goal(i, fleet.pos[i])};
+    }
+  }
+  EXPECT_GT(held, 0) << "30 ms for 400 agents left no step a search: " << planner->stats().dump();
 }
 
 TEST(WindowLns, OnByTheRuleOnlyInTheRotationModelWithRoomToGoRound) {

@@ -121,7 +121,7 @@ class GdRhcrPlanner : public Planner {
   bool follows_guidance(const WorldView& world, int i, Cell to, Cell pref) const;
   void run_secondary(const WorldView& world, const std::vector<int>& agents,
                      const std::vector<Cell>& next, std::vector<Cell>& out);
-  void adopt_one_step_plans(const WorldView& world, const std::vector<int>& agents,
+  void keep_secondary_steps(const WorldView& world, const std::vector<int>& agents,
                             const std::vector<Cell>& next);
   void roll_forecast(const WorldView& world, const std::vector<int>& secondary,
                      const std::vector<uint8_t>& on_secondary, const std::vector<Cell>& next);
@@ -143,6 +143,9 @@ class GdRhcrPlanner : public Planner {
   StepBudget budget_;        // this step's
   std::vector<std::shared_ptr<const Plan>> plan_of_;  // lambda_i: the plan agent i follows
   std::vector<int> slot_of_;                          // agent i's row in that plan
+  // Agents without a plan (the secondary solver's): their last step, from -> to, at step_at.
+  std::vector<Cell> step_from_, step_to_;
+  std::vector<int> step_at_;
   long next_plan_id_ = 1;
   int now_ = 0;  // the timestep of the last plan_step
   std::vector<GroupInfo> last_groups_;

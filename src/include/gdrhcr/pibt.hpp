@@ -127,9 +127,12 @@ class PibtStep {
   double priority(int i) const { return priority_[i]; }
   const PibtOptions& options() const { return opt_; }
   long swaps() const { return swaps_; }
-  // Rotation operations (PibtOptions::Rotation::kOperations) only: the next step() stops planning
-  // agents at `deadline`; those not planned by then keep their cells (wait), which is always
-  // valid. One step only (cleared by step()); the cell PIBT is linear and needs none.
+  // The next step() stops planning agents at `deadline`; those not planned by then keep their
+  // cells (wait), which is always valid: an agent only ever moves into a cell whose agent was
+  // planned first. Over operations the check comes before each agent; over cells before each
+  // kDeadlineStride agents of the priority order, after the first kDeadlineStride (so every step
+  // moves some agents: PIBT over 10,000 agents with turns takes about 10 ms here). One step only
+  // (cleared by step()).
   void set_deadline(std::chrono::steady_clock::time_point deadline) { deadline_ = deadline; }
   long deadline_stops() const { return deadline_stops_; }  // steps stopped so
   long starts() const { return starts_; }            // rotation_starts: PIBT runs made
@@ -137,6 +140,7 @@ class PibtStep {
   static constexpr int kStartBox = 4;
   static constexpr double kStartNoise = 5.0;
   static constexpr int kOpSteps = 3;  // actions per operation in the rotation model
+  static constexpr int kDeadlineStride = 64;
 
  private:
   bool push(const WorldView& world, int ai, int aj, std::vector<Cell>& next);

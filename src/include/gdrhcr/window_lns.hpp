@@ -117,7 +117,12 @@ class WindowLns : public Planner {
   std::vector<std::unique_ptr<Worker>> workers_;  // the first also searches everyone after the zones
   std::vector<std::vector<Pose>> last_;  // the plan of the step before
   int last_timestep_ = -2;
-  long steps_searched_ = 0, rollouts_cut_ = 0, stale_stops_ = 0, zoned_steps_ = 0;
+  int w_ = 0;                 // this step's window (at most cfg_.window; see plan_step)
+  double inner_s_ = 0;         // the planner beneath's time with its share lately (0 = not yet)
+  double rollout_step_s_ = 0;  // one rollout step's time lately (0 = no rollout yet)
+  static constexpr double kEstimateWeight = 0.25;  // of the newest measure in both
+  static constexpr double kEstimateDecay = 0.995;  // of both per step without a search
+  long steps_searched_ = 0, rollouts_cut_ = 0, rollouts_skipped_ = 0, stale_stops_ = 0, zoned_steps_ = 0;
   double search_s_ = 0;
 };
 
