@@ -271,9 +271,9 @@ void PibtStep::push_all(const WorldView& world, std::vector<Cell>& next,
   const bool timed = deadline_ != std::chrono::steady_clock::time_point::max();
   for (size_t k = 0; k < order_.size(); ++k) {
     if (timed && k >= kDeadlineStride && k % kDeadlineStride == 0 && std::chrono::steady_clock::now() >= deadline_) {
-      ++deadline_stops_;  // the agents no push has reached keep their cells
+      ++deadline_stops_;  // the agents no push has reached take a cheap step
       for (; k < order_.size(); ++k)
-        if (next[order_[k]] == kNoCell) next[order_[k]] = world.positions[order_[k]];
+        if (next[order_[k]] == kNoCell) step_ahead(world, order_[k], next);
       break;
     }
     if (next[order_[k]] == kNoCell) push(world, order_[k], -1, next);
@@ -289,6 +289,27 @@ void PibtStep::push_all(const WorldView& world, std::vector<Cell>& next,
   }
   if (world.blocked)
     for (Cell c : *world.blocked) occupied_next_[c] = kFree;
+}
+
+// An agent past the deadline: into the cell ahead (rotation: the one it faces; mapf: its nearest
+// neighbour) when nobody stands there or has claimed it and it is nearer the goal, else it waits.
+// A few reads of its row, against PIBT's candidates and pushes; valid, since the cell is empty now.
+void PibtStep::step_ahead(const WorldView& world, int ai, std::vector<Cell>& next) {
+  const DistRow& row = *rows_[ai];
+  const Cell here = world.positions[ai];
+  Cell to = here;
+  if (world.rotation()) {
+    const Heading h = (*world.headings)[ai];
+    const Cell f = forward_cell(grid_, here, h);
+    if (f != kNoCell && row.at(f, h) < row.at(here, h)) to = f;
+  } else {
+    int best = row[here];
+    for (Cell c : grid_.neighbours(here))
+      if (row[c] < best && occupied_now_[c] == kFree && occupied_next_[c] == kFree) best = row[c], to = c;
+  }
+  if (to != here && (occupied_now_[to] != kFree || occupied_next_[to] != kFree)) to = here;
+  occupied_next_[to] = ai;
+  next[ai] = to;
 }
 
 // kCells in the rotation model: the cells this call chose, executed by turning first (see

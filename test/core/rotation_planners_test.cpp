@@ -210,8 +210,8 @@ TEST(RotationPlanners, OperationsStopAtTheStepBudgetAndTheOthersWait) {
 
 TEST(RotationPlanners, CellsStopAtTheStepBudgetAndTheOthersWait) {
   // PIBT over cells with a budget nothing fits in: every call stops after its first
-  // kDeadlineStride agents (and the agents they push), the rest wait, every step stays valid and
-  // the stops are counted. The fleet still moves, less than without a budget.
+  // kDeadlineStride agents (and the agents they push), the rest step straight ahead or wait,
+  // every step stays valid and the stops are counted. The fleet still moves and reaches goals.
   const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
   DistTable dist(g, ActionModel::kRotation);
   const int n = 300;
@@ -220,7 +220,7 @@ TEST(RotationPlanners, CellsStopAtTheStepBudgetAndTheOthersWait) {
   opt.steps = 15;
   opt.record_paths = true;
   opt.action_model = ActionModel::kRotation;
-  long moves[2] = {0, 0};
+  long moves[2] = {0, 0}, goals[2] = {0, 0};
   for (int k = 0; k < 2; ++k) {
     const char* budget = k == 0 ? "1e-9" : "0";
     SCOPED_TRACE(std::string("step-budget ") + budget);
@@ -231,14 +231,16 @@ TEST(RotationPlanners, CellsStopAtTheStepBudgetAndTheOthersWait) {
     RandomNavigationStream tasks(g, 3);
     const SimResult r = run_simulation(g, dist, tasks, *planner, starts, opt);
     EXPECT_EQ(r.collisions, 0);
+    goals[k] = r.goals_reached;
     for (const auto& path : r.paths)
       for (size_t t = 1; t < path.size(); ++t) moves[k] += path[t] != path[t - 1];
     const long stops = planner->stats()["secondary_deadline_stops"].get<long>();
     if (k == 0) EXPECT_GE(stops, opt.steps);
     else EXPECT_EQ(stops, 0);
   }
-  EXPECT_GT(moves[0], 0) << "the first agents of every call still move";
-  EXPECT_LT(moves[0] * 2, moves[1]) << "with a budget nothing fits in, most agents wait";
+  EXPECT_GT(moves[0], n) << "the first agents of every call and those with a free cell ahead move";
+  EXPECT_GT(goals[0], 0);
+  EXPECT_GT(goals[1], 0);
 }
 
 namespace {

@@ -127,12 +127,13 @@ class PibtStep {
   double priority(int i) const { return priority_[i]; }
   const PibtOptions& options() const { return opt_; }
   long swaps() const { return swaps_; }
-  // The next step() stops planning agents at `deadline`; those not planned by then keep their
-  // cells (wait), which is always valid: an agent only ever moves into a cell whose agent was
-  // planned first. Over operations the check comes before each agent; over cells before each
-  // kDeadlineStride agents of the priority order, after the first kDeadlineStride (so every step
-  // moves some agents: PIBT over 10,000 agents with turns takes about 10 ms here). One step only
-  // (cleared by step()).
+  // The next step() stops planning agents at `deadline`. Over operations the check comes before
+  // each agent, and those not planned by then keep their cells (wait), which is always valid: an
+  // agent only ever moves into a cell whose agent was planned first. Over cells it comes before
+  // each kDeadlineStride agents of the priority order, after the first kDeadlineStride (PIBT over
+  // 10,000 agents with turns takes about 10 ms here), and the agents not planned by then step
+  // ahead: into the cell they face (mapf: their nearest neighbour) when it is empty, unclaimed and
+  // nearer their goal, else they wait. One step only (cleared by step()).
   void set_deadline(std::chrono::steady_clock::time_point deadline) { deadline_ = deadline; }
   long deadline_stops() const { return deadline_stops_; }  // steps stopped so
   long starts() const { return starts_; }            // rotation_starts: PIBT runs made
@@ -144,6 +145,7 @@ class PibtStep {
 
  private:
   bool push(const WorldView& world, int ai, int aj, std::vector<Cell>& next);
+  void step_ahead(const WorldView& world, int ai, std::vector<Cell>& next);
 
   // Rotation model: operations (see above; pibt_operations.cpp).
   static constexpr int kOpDepth = 30;    // displaced agents planned recursively, at most this deep

@@ -7,7 +7,10 @@
 //
 // Every step the planner beneath (GD-RHCR, PIBT) first makes a valid step, as without this layer.
 // PIBT then carries that step on to a joint plan of `window` steps (each step valid: no vertex or
-// edge conflict, every transition one action of the model in force). Each agent's cost in the plan
+// edge conflict, every transition one action of the model in force), or of as many as leave one
+// rollout step's time before the stop. When the planner beneath and two rollout steps would not
+// fit in the budget (by their times lately), the step has no search and the planner beneath gets
+// the budget up to the stop: a rollout cut short is time lost. Each agent's cost in the plan
 // is the cost of its steps until it first stands on its goal (its errand is then done, and its later
 // steps cost nothing: it stays there, or makes way for others), or, when it does not reach it, of
 // all its steps plus its distance (with turns) from where the window leaves it. A step costs what
