@@ -268,7 +268,10 @@ void PibtStep::push_all(const WorldView& world, std::vector<Cell>& next,
   if (world.blocked)  // blocked cells (a late robot still leaving them): nobody enters
     for (Cell c : *world.blocked) occupied_next_[c] = kFixed;
   std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) { return priority_[a] > priority_[b]; });
-  const bool timed = deadline_ != std::chrono::steady_clock::time_point::max();
+  // A call that begins past its deadline plans everyone: the step is over its budget whatever PIBT
+  // does, and stopping at once would leave all but kDeadlineStride agents to step ahead or wait.
+  const bool timed = deadline_ != std::chrono::steady_clock::time_point::max() &&
+                     std::chrono::steady_clock::now() < deadline_;
   for (size_t k = 0; k < order_.size(); ++k) {
     if (timed && k >= kDeadlineStride && k % kDeadlineStride == 0 && std::chrono::steady_clock::now() >= deadline_) {
       ++deadline_stops_;  // the agents no push has reached take a cheap step

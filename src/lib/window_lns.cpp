@@ -431,11 +431,13 @@ StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next)
   const auto t0 = Clock::now();
   double budget = cfg_.step_budget_s;
   if (world.step_budget_s > 0) budget = budget > 0 ? std::min(budget, world.step_budget_s) : world.step_budget_s;
-  // When the planner beneath (as it ran with its share lately) and two rollout steps would not end
-  // before the stop, the search is skipped and the planner beneath gets the budget up to the stop.
-  // A skipped step measures no rollout, so both estimates decay: now and then a step tries again.
+  // When the planner beneath (as it ran with its share lately) and a rollout of half the window
+  // would not end before the stop, the search is skipped and the planner beneath gets the budget up
+  // to the stop (a search over a shorter window lost errands on warehouse_large). A skipped step
+  // measures no rollout, so both estimates decay: now and then a step tries again.
+  const int shortest = std::max(std::min(2, cfg_.window), cfg_.window / 2);  // window worth a search
   const bool room = budget <= 0 || inner_s_ <= 0 || rollout_step_s_ <= 0 ||
-                    inner_s_ + 2 * rollout_step_s_ <= budget * WindowLnsConfig::kStopShare;
+                    inner_s_ + shortest * rollout_step_s_ <= budget * WindowLnsConfig::kStopShare;
   WorldView view = world;
   if (budget > 0) view.step_budget_s = budget * (room ? WindowLnsConfig::kInnerShare : WindowLnsConfig::kStopShare);
   StepReport report = inner_->plan_step(view, next);
@@ -453,12 +455,12 @@ StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next)
                                 : t0 + std::chrono::duration_cast<Clock::duration>(
                                            std::chrono::duration<double>(budget * WindowLnsConfig::kStopShare));
   // This step's window: the configured one, or as many steps as leave one rollout step's time
-  // before the stop (at least two: the planner's step and one more).
+  // before the stop (at least half the configured one, else no search).
   w_ = cfg_.window;
   if (budget > 0 && rollout_step_s_ > 0) {
     const double left = std::chrono::duration<double>(stop - Clock::now()).count();
     w_ = static_cast<int>(std::min<double>(cfg_.window, std::floor(left / rollout_step_s_)));
-    if (!room || w_ < std::min(2, cfg_.window)) {
+    if (!room || w_ < shortest) {
       ++rollouts_skipped_;
       inner_s_ *= kEstimateDecay, rollout_step_s_ *= kEstimateDecay;
       return report;

@@ -208,39 +208,35 @@ TEST(RotationPlanners, OperationsStopAtTheStepBudgetAndTheOthersWait) {
   }
 }
 
-TEST(RotationPlanners, CellsStopAtTheStepBudgetAndTheOthersWait) {
-  // PIBT over cells with a budget nothing fits in: every call stops after its first
-  // kDeadlineStride agents (and the agents they push), the rest step straight ahead or wait,
-  // every step stays valid and the stops are counted. The fleet still moves and reaches goals.
-  const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+TEST(RotationPlanners, CellsStopAtTheStepBudgetAndTheOthersStepAheadOrWait) {
+  // PIBT over cells under budgets from none to one nothing fits in. A call that begins past its
+  // deadline plans everyone (the step is over budget anyway): with 1e-9 s no call stops. Budgets
+  // around PIBT's own time stop some calls after their first kDeadlineStride agents (the rest
+  // step ahead or wait). Every step stays valid and the fleet reaches goals whatever the budget.
+  const Grid g = Grid::load(repo("maps/random-64-64-20.map"));
   DistTable dist(g, ActionModel::kRotation);
-  const int n = 300;
+  const int n = 1500;
   const auto starts = random_starts(g, n, 3);
   SimOptions opt;
-  opt.steps = 15;
-  opt.record_paths = true;
+  opt.steps = 20;
   opt.action_model = ActionModel::kRotation;
-  long moves[2] = {0, 0}, goals[2] = {0, 0};
-  for (int k = 0; k < 2; ++k) {
-    const char* budget = k == 0 ? "1e-9" : "0";
+  long stopped = 0;
+  for (const char* budget : {"1e-9", "0.001", "0.0015", "0.002", "0.003", "0.005"}) {
     SCOPED_TRACE(std::string("step-budget ") + budget);
     Params p;
     p.set("rotation-pibt", "cells");
+    p.set("lns-window", "0");
     p.set("step-budget", budget);
     auto planner = make_planner("gd-rhcr", p, g, n, 3, ActionModel::kRotation);
     RandomNavigationStream tasks(g, 3);
     const SimResult r = run_simulation(g, dist, tasks, *planner, starts, opt);
     EXPECT_EQ(r.collisions, 0);
-    goals[k] = r.goals_reached;
-    for (const auto& path : r.paths)
-      for (size_t t = 1; t < path.size(); ++t) moves[k] += path[t] != path[t - 1];
+    EXPECT_GT(r.goals_reached, 0);
     const long stops = planner->stats()["secondary_deadline_stops"].get<long>();
-    if (k == 0) EXPECT_GE(stops, opt.steps);
-    else EXPECT_EQ(stops, 0);
+    if (std::string(budget) == "1e-9") EXPECT_EQ(stops, 0) << "calls begun past the deadline plan everyone";
+    else stopped += stops;
   }
-  EXPECT_GT(moves[0], n) << "the first agents of every call and those with a free cell ahead move";
-  EXPECT_GT(goals[0], 0);
-  EXPECT_GT(goals[1], 0);
+  EXPECT_GT(stopped, 0) << "no budget from 1 to 5 ms stopped PIBT over 1,500 agents";
 }
 
 namespace {
