@@ -456,7 +456,7 @@ void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
 // The secondary solver's agents (and those the final check re-moved) follow no plan: their
 // groups are replanned at the next step (Algorithm 1's lazy test fails on a missing plan, as it
 // would on an exhausted one-step plan), so only the step itself is kept, for planned_path. No
-// plan object per group: with 10,000 agents making them was a tenth of a step.
+// plan object per group: with 10,000 agents they cost a third of the step.
 void GdRhcrPlanner::keep_secondary_steps(const WorldView& world, const std::vector<int>& agents,
                                          const std::vector<Cell>& next) {
   if (step_from_.size() != plan_of_.size())

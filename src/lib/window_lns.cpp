@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <chrono>
 #include <climits>
-#include <cmath>
 #include <numeric>
 #include <stdexcept>
 #include <system_error>
@@ -143,16 +142,16 @@ int WindowLns::step_cost(const WorldView& world, Pose a, Pose b) {
 long WindowLns::cost_of(const WorldView& world, int agent, const std::vector<Pose>& path) const {
   const DistRow& row = *rows_[agent];
   long cost = 0;
-  for (int t = 0; t < w_; ++t) {
+  for (int t = 0; t < cfg_.window; ++t) {
     if (path[t].cell == row.goal()) return cost;
     cost += step_cost(world, path[t], path[t + 1]);
   }
-  if (path[w_].cell == row.goal()) return cost;
-  return cost + row.at(path[w_].cell, world.rotation() ? path[w_].heading : kEast);
+  if (path[cfg_.window].cell == row.goal()) return cost;
+  return cost + row.at(path[cfg_.window].cell, world.rotation() ? path[cfg_.window].heading : kEast);
 }
 
 void WindowLns::reserve(int agent, const std::vector<Pose>& path, bool on) {
-  for (int t = 0; t <= w_; ++t) at(t, path[t].cell) = on ? agent : -1;
+  for (int t = 0; t <= cfg_.window; ++t) at(t, path[t].cell) = on ? agent : -1;
 }
 
 // PIBT carries the planner's first step on to the window's end; an agent that reaches its goal on
@@ -160,7 +159,7 @@ void WindowLns::reserve(int agent, const std::vector<Pose>& path, bool on) {
 bool WindowLns::rollout(const WorldView& world, const std::vector<Cell>& next, Clock::time_point stop) {
   const int n = world.num_agents();
   const bool rot = world.rotation();
-  paths_.assign(n, std::vector<Pose>(w_ + 1));
+  paths_.assign(n, std::vector<Pose>(cfg_.window + 1));
   std::vector<std::vector<Cell>> goals(n);
   std::vector<size_t> goal_index(n, 0);
   for (int i = 0; i < n; ++i) {
@@ -176,7 +175,7 @@ bool WindowLns::rollout(const WorldView& world, const std::vector<Cell>& next, C
   std::vector<Cell> pos(n), nxt(n);
   std::vector<Heading> heads(n), next_heads(n);
   const auto t0 = Clock::now();
-  for (int t = 1; t < w_; ++t) {
+  for (int t = 1; t < cfg_.window; ++t) {
     for (int i = 0; i < n; ++i) pos[i] = paths_[i][t].cell, heads[i] = paths_[i][t].heading;
     WorldView view{world.grid, world.dist, world.timestep + t, pos, goals};
     view.action_model = world.action_model;
@@ -187,7 +186,7 @@ bool WindowLns::rollout(const WorldView& world, const std::vector<Cell>& next, C
       advance_goal(i, nxt[i]);
     }
     const auto now = Clock::now();
-    if (now >= stop || t + 1 == w_) {  // this rollout's time per step, into the estimate
+    if (now >= stop || t + 1 == cfg_.window) {  // this rollout's time per step, into the estimate
       const double step_s = std::chrono::duration<double>(now - t0).count() / t;
       rollout_step_s_ = rollout_step_s_ > 0 ? (1 - kEstimateWeight) * rollout_step_s_ + kEstimateWeight * step_s : step_s;
     }
@@ -203,7 +202,7 @@ bool WindowLns::rollout(const WorldView& world, const std::vector<Cell>& next, C
 bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& path, Search& s) {
   const DistRow& row = *rows_[agent];
   const Cell goal = row.goal();
-  const int W = w_;
+  const int W = cfg_.window;
   const int K = world.rotation() ? kNumHeadings : 1;
   const Pose start = path[0];
   // A state's cell is numbered in the box of side 2W + 1 around the start: the agent cannot leave it.
@@ -256,7 +255,7 @@ bool WindowLns::replan(const WorldView& world, int agent, std::vector<Pose>& pat
       float g2 = s.g[id] + (r ? (still ? 0.0f : kFreeMove)
                               : static_cast<float>(step_cost(world, {c, hd}, {c2, h2})) +
                                     (c2 == c && h2 != hd ? kTurnTieBreak : 0.0f));
-      if (keep && t + 2 < static_cast<int>(last_[agent].size()) && last_[agent][t + 2] != Pose{c2, K > 1 ? h2 : kEast}) g2 += kKeepTieBreak;
+      if (keep && t + 2 <= W && last_[agent][t + 2] != Pose{c2, K > 1 ? h2 : kEast}) g2 += kKeepTieBreak;
       if (s.seen[id2] == s.stamp && s.g[id2] <= g2) return;
       s.seen[id2] = s.stamp, s.parent[id2] = id, s.g[id2] = g2;
       s.open.push(g2 + static_cast<float>(d), t + 1, id2);
@@ -288,7 +287,7 @@ void WindowLns::add_blockers(const WorldView& world, int seed_agent, std::vector
         std::find(agents.begin(), agents.end(), b) == agents.end())
       agents.push_back(b);
   };
-  for (int t = 0; t < w_ && p.cell != row.goal(); ++t) {
+  for (int t = 0; t < cfg_.window && p.cell != row.goal(); ++t) {
     Pose best = p;
     int best_d = rot ? row.at(p.cell, p.heading) : row[p.cell];
     if (rot) {
@@ -303,7 +302,7 @@ void WindowLns::add_blockers(const WorldView& world, int seed_agent, std::vector
     if (best == p) break;
     p = best;
     add(at(t + 1, p.cell));
-    if (t + 2 <= w_) add(at(t + 2, p.cell));
+    if (t + 2 <= cfg_.window) add(at(t + 2, p.cell));
   }
 }
 
@@ -406,7 +405,7 @@ int WindowLns::make_zones(const WorldView& world) {
   for (int a : delayed_) v.push_back(axis ? grid_.y_of(world.positions[a]) : grid_.x_of(world.positions[a]));
   std::sort(v.begin(), v.end());
   // A search reaches kNeighbourRadius cells (its neighbours) and `window` cells (paths) from its agents.
-  const int margin = std::max(w_, kNeighbourRadius) + 1;
+  const int margin = std::max(cfg_.window, kNeighbourRadius) + 1;
   for (int zones = static_cast<int>(workers_.size()); zones >= 2; --zones) {
     size_t held = 0;
     bool fits = static_cast<int>(v.size()) >= 2 * zones;
@@ -431,13 +430,13 @@ StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next)
   const auto t0 = Clock::now();
   double budget = cfg_.step_budget_s;
   if (world.step_budget_s > 0) budget = budget > 0 ? std::min(budget, world.step_budget_s) : world.step_budget_s;
-  // When the planner beneath (as it ran with its share lately) and a rollout of half the window
+  // When the planner beneath (as it ran with its share lately) and a rollout of the whole window
   // would not end before the stop, the search is skipped and the planner beneath gets the budget up
-  // to the stop (a search over a shorter window lost errands on warehouse_large). A skipped step
-  // measures no rollout, so both estimates decay: now and then a step tries again.
-  const int shortest = std::max(std::min(2, cfg_.window), cfg_.window / 2);  // window worth a search
+  // to the stop (a rollout cut short is time lost; searches over shorter windows lost errands on
+  // warehouse_large). A skipped step measures no rollout, so both estimates decay: now and then a
+  // step tries again.
   const bool room = budget <= 0 || inner_s_ <= 0 || rollout_step_s_ <= 0 ||
-                    inner_s_ + shortest * rollout_step_s_ <= budget * WindowLnsConfig::kStopShare;
+                    inner_s_ + cfg_.window * rollout_step_s_ <= budget * WindowLnsConfig::kStopShare;
   WorldView view = world;
   if (budget > 0) view.step_budget_s = budget * (room ? WindowLnsConfig::kInnerShare : WindowLnsConfig::kStopShare);
   StepReport report = inner_->plan_step(view, next);
@@ -454,17 +453,12 @@ StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next)
   const auto stop = budget <= 0 ? Clock::time_point::max()
                                 : t0 + std::chrono::duration_cast<Clock::duration>(
                                            std::chrono::duration<double>(budget * WindowLnsConfig::kStopShare));
-  // This step's window: the configured one, or as many steps as leave one rollout step's time
-  // before the stop (at least half the configured one, else no search).
-  w_ = cfg_.window;
-  if (budget > 0 && rollout_step_s_ > 0) {
-    const double left = std::chrono::duration<double>(stop - Clock::now()).count();
-    w_ = static_cast<int>(std::min<double>(cfg_.window, std::floor(left / rollout_step_s_)));
-    if (!room || w_ < shortest) {
-      ++rollouts_skipped_;
-      inner_s_ *= kEstimateDecay, rollout_step_s_ *= kEstimateDecay;
-      return report;
-    }
+  // The rollout of window - 1 steps, and one more step's time for the search, must fit before the stop.
+  if (budget > 0 && rollout_step_s_ > 0 &&
+      (!room || std::chrono::duration<double>(stop - Clock::now()).count() < cfg_.window * rollout_step_s_)) {
+    ++rollouts_skipped_;
+    inner_s_ *= kEstimateDecay, rollout_step_s_ *= kEstimateDecay;
+    return report;
   }
   const auto s0 = Clock::now();
   const int n = world.num_agents();
@@ -477,7 +471,7 @@ StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next)
     search_s_ += std::chrono::duration<double>(Clock::now() - s0).count();
     return report;
   }
-  reserved_.assign(static_cast<size_t>(w_ + 1) * cells_, -1);
+  reserved_.assign(static_cast<size_t>(cfg_.window + 1) * cells_, -1);
   cost_.assign(n, 0);
   lower_.assign(n, 0);
   delayed_.clear();

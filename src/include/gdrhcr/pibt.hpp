@@ -133,7 +133,8 @@ class PibtStep {
   // each kDeadlineStride agents of the priority order, after the first kDeadlineStride (PIBT over
   // 10,000 agents with turns takes about 10 ms here), and the agents not planned by then step
   // ahead: into the cell they face (mapf: their nearest neighbour) when it is empty, unclaimed and
-  // nearer their goal, else they wait. One step only (cleared by step()).
+  // nearer their goal, else they wait; a call over cells that begins past the deadline plans
+  // everyone (its step is over budget anyway). One step only (cleared by step()).
   void set_deadline(std::chrono::steady_clock::time_point deadline) { deadline_ = deadline; }
   long deadline_stops() const { return deadline_stops_; }  // steps stopped so
   long starts() const { return starts_; }            // rotation_starts: PIBT runs made

@@ -7,13 +7,12 @@
 //
 // Every step the planner beneath (GD-RHCR, PIBT) first makes a valid step, as without this layer.
 // PIBT then carries that step on to a joint plan of `window` steps (each step valid: no vertex or
-// edge conflict, every transition one action of the model in force), or of as many as leave one
-// rollout step's time before the stop. When the planner beneath and two rollout steps would not
-// fit in the budget (by their times lately), the step has no search and the planner beneath gets
-// the budget up to the stop: a rollout cut short is time lost. Each agent's cost in the plan
-// is the cost of its steps until it first stands on its goal (its errand is then done, and its later
-// steps cost nothing: it stays there, or makes way for others), or, when it does not reach it, of
-// all its steps plus its distance (with turns) from where the window leaves it. A step costs what
+// edge conflict, every transition one action of the model in force). When the planner beneath and
+// the rollout would not fit in the budget (by their times lately), the step has no search and the
+// planner beneath gets the budget up to the stop: a rollout cut short is time lost. Each agent's
+// cost in the plan is the cost of its steps until it first stands on its goal (its errand is then done,
+// and its later steps cost nothing: it stays there, or makes way for others), or, when it does not
+// reach it, of all its steps plus its distance (with turns) from where the window leaves it. A step costs what
 // the distance rows charge for it: a wait or a turn 1, a forward move 1 plus the step costs in force
 // (one-way lanes, traffic; dist_table.hpp), so the search keeps to the lanes as the rows do.
 // Then, until the step's deadline: an agent that the plan delays (its cost above its distance) is
@@ -120,7 +119,6 @@ class WindowLns : public Planner {
   std::vector<std::unique_ptr<Worker>> workers_;  // the first also searches everyone after the zones
   std::vector<std::vector<Pose>> last_;  // the plan of the step before
   int last_timestep_ = -2;
-  int w_ = 0;                 // this step's window (at most cfg_.window; see plan_step)
   double inner_s_ = 0;         // the planner beneath's time with its share lately (0 = not yet)
   double rollout_step_s_ = 0;  // one rollout step's time lately (0 = no rollout yet)
   static constexpr double kEstimateWeight = 0.25;  // of the newest measure in both
