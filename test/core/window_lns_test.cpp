@@ -307,7 +307,7 @@ TEST(WindowLns, UnderABudgetEachHeldPlanSpansTheWindowAndIsValid) {
   Fleet fleet(g, ActionModel::kRotation, n, 2);
   Params params;
   params.set("lns-window", std::to_string(window));
-  params.set("step-budget", "0.03");
+  params.set("step-budget", "1");  // ample even under the sanitizers
   auto planner = make_planner("gd-rhcr", params, g, n, 2, ActionModel::kRotation);
   auto& lns = dynamic_cast<WindowLns&>(*planner);
   int held = 0;
@@ -331,7 +331,7 @@ TEST(WindowLns, UnderABudgetEachHeldPlanSpansTheWindowAndIsValid) {
       if (fleet.pos[i] == fleet.goals[i][0]) fleet.goals[i] = {fleet.tasks.next_goal(i, fleet.pos[i])};
     }
   }
-  EXPECT_GT(held, 0) << "30 ms for 400 agents left no step a search: " << planner->stats().dump();
+  EXPECT_GT(held, 0) << "a second for 400 agents left no step a search: " << planner->stats().dump();
 }
 
 TEST(WindowLns, OnByTheRuleOnlyInTheRotationModelWithRoomToGoRound) {
