@@ -111,6 +111,9 @@ GdRhcrPlanner::GdRhcrPlanner(const Grid& grid, int num_agents, uint64_t seed, Gd
       density_(grid),
       plan_of_(num_agents),
       slot_of_(num_agents, 0),
+      step_from_(num_agents, kNoCell),
+      step_to_(num_agents, kNoCell),
+      step_at_(num_agents, -1),
       arena_(std::make_unique<Arena>(std::max(1, cfg_.threads))) {
   if (cfg_.V < 0) throw ParamError("gd-rhcr: V must be >= 0, got " + std::to_string(cfg_.V));
   if (cfg_.H < 1) throw ParamError("gd-rhcr: H must be >= 1, got " + std::to_string(cfg_.H));
@@ -307,10 +310,7 @@ std::vector<PlannerGroup> GdRhcrPlanner::groups() const {
 std::vector<Cell> GdRhcrPlanner::planned_path(int agent) const {
   if (agent < 0 || agent >= static_cast<int>(plan_of_.size())) return {};
   const auto& plan = plan_of_[agent];
-  if (!plan) {
-    if (static_cast<size_t>(agent) < step_at_.size() && step_at_[agent] == now_) return {step_from_[agent], step_to_[agent]};
-    return {};
-  }
+  if (!plan) return step_at_[agent] == now_ ? std::vector<Cell>{step_from_[agent], step_to_[agent]} : std::vector<Cell>{};
   const auto& path = plan->paths[slot_of_[agent]];
   const int from = std::clamp(now_ - plan->start_time, 0, static_cast<int>(path.size()) - 1);
   return std::vector<Cell>(path.begin() + from, path.end());
@@ -459,9 +459,6 @@ void GdRhcrPlanner::solve_primary(const WorldView& world, Job& job) const {
 // plan object per group: with 10,000 agents they cost a third of the step.
 void GdRhcrPlanner::keep_secondary_steps(const WorldView& world, const std::vector<int>& agents,
                                          const std::vector<Cell>& next) {
-  if (step_from_.size() != plan_of_.size())
-    step_from_.assign(plan_of_.size(), kNoCell), step_to_.assign(plan_of_.size(), kNoCell),
-        step_at_.assign(plan_of_.size(), -1);
   for (int i : agents) {
     plan_of_[i].reset();
     step_from_[i] = world.positions[i], step_to_[i] = next[i], step_at_[i] = world.timestep;

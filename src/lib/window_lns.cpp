@@ -28,6 +28,13 @@ constexpr size_t kZonedHeld = 2;     // the zones must hold at least 1/kZonedHel
 // A neighbourhood is planned up to this many times, each time with the agent that found no path
 // first: failed neighbourhoods feed a jam (docs/results.md, session 29).
 constexpr int kAttempts = 4;
+// The running estimates of the planner beneath's time and a rollout step's: the newest measure's
+// weight, and their decay per step without a search.
+constexpr double kEstimateWeight = 0.25;
+constexpr double kEstimateDecay = 0.995;
+void blend(double& estimate, double measure) {
+  estimate = estimate > 0 ? (1 - kEstimateWeight) * estimate + kEstimateWeight * measure : measure;
+}
 }  // namespace
 
 // One space-time A*'s scratch: per state (t, reached, cell, heading) a stamp and a parent, reset in
@@ -186,10 +193,8 @@ bool WindowLns::rollout(const WorldView& world, const std::vector<Cell>& next, C
       advance_goal(i, nxt[i]);
     }
     const auto now = Clock::now();
-    if (now >= stop || t + 1 == cfg_.window) {  // this rollout's time per step, into the estimate
-      const double step_s = std::chrono::duration<double>(now - t0).count() / t;
-      rollout_step_s_ = rollout_step_s_ > 0 ? (1 - kEstimateWeight) * rollout_step_s_ + kEstimateWeight * step_s : step_s;
-    }
+    if (now >= stop || t + 1 == cfg_.window)  // this rollout's time per step, into the estimate
+      blend(rollout_step_s_, std::chrono::duration<double>(now - t0).count() / t);
     if (now >= stop) return false;
   }
   return true;
@@ -426,6 +431,28 @@ int WindowLns::make_zones(const WorldView& world) {
   return 1;
 }
 
+// The zones at once, one thread each, for kZonedShare of the time to `stop` (and of `iterations`
+// when > 0); returns the iterations left for the search over everyone.
+long WindowLns::search_zones(const WorldView& world, int zones, Clock::time_point stop, long iterations) {
+  ++zoned_steps_;
+  auto zoned_stop = stop;
+  if (stop != Clock::time_point::max())
+    zoned_stop = Clock::now() + std::chrono::duration_cast<Clock::duration>((stop - Clock::now()) * WindowLnsConfig::kZonedShare);
+  const long zoned = iterations > 0 ? std::max(1L, static_cast<long>(iterations * WindowLnsConfig::kZonedShare) / zones)
+                                    : 0;
+  std::vector<std::thread> threads;
+  for (int k = 1; k < zones; ++k) {
+    try {
+      threads.emplace_back([&, k] { search(world, *workers_[k], zoned_stop, zoned); });
+    } catch (const std::system_error&) {  // no thread to be had: this zone here, before the first
+      search(world, *workers_[k], zoned_stop, zoned);
+    }
+  }
+  search(world, *workers_[0], zoned_stop, zoned);
+  for (auto& t : threads) t.join();
+  return iterations > 0 ? std::max(0L, iterations - zoned * zones) : iterations;
+}
+
 StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next) {
   const auto t0 = Clock::now();
   double budget = cfg_.step_budget_s;
@@ -442,8 +469,7 @@ StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next)
   StepReport report = inner_->plan_step(view, next);
   const double inner_s = std::chrono::duration<double>(Clock::now() - t0).count();
   // Given the whole budget, a step that ended within the share tells the share's time too.
-  if (room || inner_s <= budget * WindowLnsConfig::kInnerShare)
-    inner_s_ = inner_s_ > 0 ? (1 - kEstimateWeight) * inner_s_ + kEstimateWeight * inner_s : inner_s;
+  if (room || inner_s <= budget * WindowLnsConfig::kInnerShare) blend(inner_s_, inner_s);
   paths_.clear();
   if (world.timestep != last_timestep_ + 1) last_.clear();
   const bool taken = (world.immovable && std::any_of(world.immovable->begin(), world.immovable->end(),
@@ -484,25 +510,7 @@ StepReport WindowLns::plan_step(const WorldView& world, std::vector<Cell>& next)
   ++steps_searched_;
   long iterations = cfg_.iterations;  // 0: until the deadline or a stale run
   const int zones = workers_.size() > 1 ? make_zones(world) : 1;
-  if (zones > 1) {  // the zones at once, then everyone
-    ++zoned_steps_;
-    auto zoned_stop = stop;
-    if (stop != Clock::time_point::max())
-      zoned_stop = Clock::now() + std::chrono::duration_cast<Clock::duration>((stop - Clock::now()) * WindowLnsConfig::kZonedShare);
-    const long zoned = iterations > 0 ? std::max(1L, static_cast<long>(iterations * WindowLnsConfig::kZonedShare) / zones)
-                                      : 0;
-    std::vector<std::thread> threads;
-    for (int k = 1; k < zones; ++k) {
-      try {
-        threads.emplace_back([&, k] { search(world, *workers_[k], zoned_stop, zoned); });
-      } catch (const std::system_error&) {  // no thread to be had: this zone here, before the first
-        search(world, *workers_[k], zoned_stop, zoned);
-      }
-    }
-    search(world, *workers_[0], zoned_stop, zoned);
-    for (auto& t : threads) t.join();
-    if (iterations > 0) iterations = std::max(0L, iterations - zoned * zones);
-  }
+  if (zones > 1) iterations = search_zones(world, zones, stop, iterations);  // then everyone
   Worker& w = *workers_[0];
   w.axis = 0, w.lo = INT_MIN, w.hi = INT_MAX, w.delayed = delayed_;
   if ((cfg_.iterations <= 0 || iterations > 0) && !search(world, w, stop, iterations)) ++stale_stops_;

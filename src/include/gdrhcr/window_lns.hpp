@@ -97,6 +97,7 @@ class WindowLns : public Planner {
   bool improve_once(const WorldView& world, Worker& w, Clock::time_point stop);
   // Neighbourhoods until `stop`, `iterations` (> 0) or a stale run; false after a stale run.
   bool search(const WorldView& world, Worker& w, Clock::time_point stop, long iterations);
+  long search_zones(const WorldView& world, int zones, Clock::time_point stop, long iterations);
   // The zones of this step, one per worker from the first, and their delayed agents: stripes along
   // the map's longer side, cut at the delayed agents' quantiles, each leaving out the agents within
   // a margin of its borders so that no two zones' searches read or write the same cell. As many
@@ -121,8 +122,6 @@ class WindowLns : public Planner {
   int last_timestep_ = -2;
   double inner_s_ = 0;         // the planner beneath's time with its share lately (0 = not yet)
   double rollout_step_s_ = 0;  // one rollout step's time lately (0 = no rollout yet)
-  static constexpr double kEstimateWeight = 0.25;  // of the newest measure in both
-  static constexpr double kEstimateDecay = 0.995;  // of both per step without a search
   long steps_searched_ = 0, rollouts_cut_ = 0, rollouts_skipped_ = 0, stale_stops_ = 0, zoned_steps_ = 0;
   double search_s_ = 0;
 };
