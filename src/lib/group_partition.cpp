@@ -88,30 +88,53 @@ void GroupPartition::link_from_state(int i, Pose start, int V) {
   }
 }
 
+// The same for V <= 2 without the search: within two steps an agent reaches the cells ahead of it
+// (two, through the first), and those on either side (a quarter turn, then forward).
+void GroupPartition::link_near_state(int i, Pose start, int V) {
+  auto link = [&](Cell c) {
+    if (c == kNoCell) return;
+    const int j = agent_at_[c];
+    if (j >= 0 && j != i) uf_.unite(i, j);
+  };
+  if (V < 1) return;
+  const Cell ahead = forward_cell(grid_, start.cell, start.heading);
+  link(ahead);
+  if (V < 2) return;
+  if (ahead != kNoCell) link(forward_cell(grid_, ahead, start.heading));
+  link(forward_cell(grid_, start.cell, rotate_cw(start.heading)));
+  link(forward_cell(grid_, start.cell, rotate_ccw(start.heading)));
+}
+
 void GroupPartition::compute(const std::vector<Cell>& positions, const std::vector<Heading>& headings, int V) {
   const int n = static_cast<int>(positions.size());
   uf_.reset(n);
   state_stamp_.resize(size_t(grid_.num_cells()) * 4, 0);
   for (int i = 0; i < n; ++i) agent_at_[positions[i]] = i;
-  for (int i = 0; i < n; ++i) link_from_state(i, {positions[i], headings[i]}, V);
+  for (int i = 0; i < n; ++i) {
+    if (V <= 2) link_near_state(i, {positions[i], headings[i]}, V);
+    else link_from_state(i, {positions[i], headings[i]}, V);
+  }
   for (int i = 0; i < n; ++i) agent_at_[positions[i]] = -1;
   build_groups(n);
 }
 
 // Canonical order: iterating agents ascending makes each group's first agent its smallest.
+// The group vectors are reused from the last call (thousands of groups a step).
 void GroupPartition::build_groups(int n) {
-  groups_.clear();
   group_of_.assign(n, -1);
-  std::vector<int> index_of_root(n, -1);
+  index_of_root_.assign(n, -1);
+  size_t count = 0;
   for (int i = 0; i < n; ++i) {
     const int r = uf_.find(i);
-    if (index_of_root[r] < 0) {
-      index_of_root[r] = static_cast<int>(groups_.size());
-      groups_.emplace_back();
+    if (index_of_root_[r] < 0) {
+      index_of_root_[r] = static_cast<int>(count);
+      if (count == groups_.size()) groups_.emplace_back();
+      groups_[count++].clear();
     }
-    group_of_[i] = index_of_root[r];
-    groups_[index_of_root[r]].push_back(i);
+    group_of_[i] = index_of_root_[r];
+    groups_[index_of_root_[r]].push_back(i);
   }
+  groups_.resize(count);
 }
 
 }  // namespace gdrhcr

@@ -4,6 +4,7 @@
 
 #include <random>
 
+#include "gdrhcr/action_model.hpp"
 #include "gdrhcr/dist_table.hpp"
 #include "gdrhcr/group_partition.hpp"
 #include "gdrhcr/task_stream.hpp"
@@ -91,5 +92,55 @@ TEST(GroupPartition, RecomputeReusesBuffersCorrectly) {
     size_t total = 0;
     for (auto& grp : p.groups()) total += grp.size();
     EXPECT_EQ(total, 100u);
+  }
+}
+
+namespace {
+// Rotation brute force: i and j are linked when either reaches the other's cell by at most V
+// actions (forward, a quarter turn either way), every sequence of them tried.
+bool reaches(const Grid& g, Pose from, Cell to, int V) {
+  if (from.cell == to) return true;
+  if (V == 0) return false;
+  for (Action a : {Action::kForward, Action::kClockwise, Action::kCounterClockwise}) {
+    const Pose q = apply_action(g, from, a);
+    if (q.cell != kNoCell && reaches(g, q, to, V - 1)) return true;
+  }
+  return false;
+}
+
+std::vector<std::vector<int>> brute_force_rotation(const Grid& g, const std::vector<Cell>& pos,
+                                                   const std::vector<Heading>& heads, int V) {
+  const int n = static_cast<int>(pos.size());
+  UnionFind uf;
+  uf.reset(n);
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b)
+      if (a != b && reaches(g, {pos[a], heads[a]}, pos[b], V)) uf.unite(a, b);
+  std::vector<std::vector<int>> groups;
+  std::vector<int> index(n, -1);
+  for (int i = 0; i < n; ++i) {
+    const int r = uf.find(i);
+    if (index[r] < 0) index[r] = static_cast<int>(groups.size()), groups.emplace_back();
+    groups[index[r]].push_back(i);
+  }
+  return groups;
+}
+}  // namespace
+
+TEST(GroupPartition, RotationMatchesBruteForceOnRandomInstances) {
+  // V <= 2 takes a shortcut (the cells ahead and to either side); V >= 3 searches the states.
+  for (const char* file : {"maps/random-32-32-20.map", "maps/room-32-32-4.map"}) {
+    const Grid g = Grid::load(repo(file));
+    GroupPartition p(g);
+    for (uint64_t seed = 1; seed <= 3; ++seed) {
+      for (int V : {0, 1, 2, 3}) {
+        const auto pos = random_starts(g, 150 + 50 * static_cast<int>(seed), seed * 17 + V);
+        std::mt19937_64 rng(seed + V);
+        std::vector<Heading> heads(pos.size());
+        for (auto& h : heads) h = static_cast<Heading>(rng() % 4);
+        p.compute(pos, heads, V);
+        EXPECT_EQ(p.groups(), brute_force_rotation(g, pos, heads, V)) << file << " seed " << seed << " V " << V;
+      }
+    }
   }
 }

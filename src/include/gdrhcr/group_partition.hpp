@@ -47,6 +47,7 @@ class GroupPartition {
   const Grid& grid_;
   UnionFind uf_;
   std::vector<int> agent_at_;        // agent per cell, -1 when empty
+  std::vector<int> index_of_root_;   // build_groups: group per union-find root
   std::vector<unsigned> seen_stamp_;  // BFS visited marks, valid when equal to stamp_
   unsigned stamp_ = 0;
   std::vector<std::pair<Cell, int>> frontier_;
@@ -57,6 +58,7 @@ class GroupPartition {
   };
   std::vector<StateStep> state_frontier_;
   void link_from_state(int i, Pose start, int V);
+  void link_near_state(int i, Pose start, int V);
   void build_groups(int n);
   std::vector<std::vector<int>> groups_;
   std::vector<int> group_of_;
