@@ -88,6 +88,8 @@ std::unique_ptr<Planner> make_gd_rhcr(const PlannerParams& v, const Grid& grid, 
   rollout.rotation = PibtOptions::Rotation::kCells;
   rollout.rotation_commit = false;
   rollout.rotation_starts = 1;
+  rollout.split_agents = v.integer("pibt-split");
+  rollout.threads = c.threads;
   return std::make_unique<WindowLns>(std::move(planner), grid, n, c, rollout, m);
 }
 
@@ -119,6 +121,8 @@ GdRhcrConfig gd_rhcr_config(const PlannerParams& v, uint64_t seed) {
   c.max_density = v.real("max-density");
   c.density_margin = v.integer("density-margin");
   c.pibt = pibt_options(v);
+  c.pibt.split_agents = v.integer("pibt-split");
+  c.pibt.threads = c.threads;
   c.guidance = v.text("guidance") == "local";
   c.forecast = forecast_config(v);
   c.lg = guidance_config(v, seed);

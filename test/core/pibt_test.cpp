@@ -215,3 +215,90 @@ TEST(Pibt, SwapKeepsCrowdedMapsCollisionFreeAndMoving) {
   }
 }
 
+
+namespace {
+// `steps` PIBT steps of a fleet on random goals (a new one on arrival), each validated; with
+// `fixed_share` > 0 that share of the agents is left out of the call and waits (a fixed move), as
+// GD-RHCR's primary groups are. Returns every step's cells; goals reached into *reached.
+std::vector<std::vector<Cell>> split_run(const Grid& g, const DistTable& dist, ActionModel model, int n, int threads,
+                                         int steps, double fixed_share, long* split, long* reached) {
+  PibtOptions o;
+  o.rotation = PibtOptions::Rotation::kCells;
+  o.rotation_swap_wait = 5;  // the rotation model's swap walks corridors across the strips too
+  o.split_agents = n / 2;
+  o.threads = threads;
+  PibtStep pibt(g, n, 11, o);
+  StepValidator validator(g, model);
+  std::vector<Cell> pos = random_starts(g, n, 11);
+  std::vector<Heading> heads(n), next_heads(n, kNoHeading);
+  for (int i = 0; i < n; ++i) heads[i] = static_cast<Heading>(i % 4);
+  std::mt19937_64 rng(5);
+  const std::vector<Cell>& free_cells = g.free_cells();
+  std::vector<std::vector<Cell>> goals(n);
+  for (auto& goal : goals) goal = {free_cells[rng() % free_cells.size()]};
+  std::vector<std::vector<Cell>> cells;
+  for (int t = 0; t < steps; ++t) {
+    WorldView w{g, dist, t, pos, goals};
+    w.action_model = model;
+    if (model == ActionModel::kRotation) w.headings = &heads, w.next_headings = &next_heads;
+    std::vector<int> agents;
+    std::vector<std::pair<Cell, Cell>> fixed;
+    std::vector<Cell> next(n, kNoCell);
+    for (int i = 0; i < n; ++i) {
+      if (i < fixed_share * n) fixed.emplace_back(pos[i], pos[i]), next[i] = pos[i], next_heads[i] = heads[i];
+      else agents.push_back(i);
+    }
+    std::vector<Cell> moved(n, kNoCell);
+    pibt.step(w, moved, agents, fixed);
+    for (int i : agents) next[i] = moved[i];
+    const auto bad = validator.check(pos, next, model == ActionModel::kRotation ? &heads : nullptr,
+                                     model == ActionModel::kRotation ? &next_heads : nullptr);
+    EXPECT_FALSE(bad) << bad->describe(g, t);
+    if (bad) break;
+    cells.push_back(next);
+    pos = next;
+    if (model == ActionModel::kRotation) heads = next_heads;
+    for (int i = 0; i < n; ++i)
+      if (pos[i] == goals[i][0]) ++*reached, goals[i] = {free_cells[rng() % free_cells.size()]};
+  }
+  *split = pibt.split_steps();
+  return cells;
+}
+}  // namespace
+
+TEST(Pibt, SplitStepsAreValidAndTheSameForAnyThreadCount) {
+  // A fleet over split_agents is planned in strips of the map (the border agents first): every
+  // step valid, with and without agents fixed outside the call, goals reached, and the same cells
+  // with one thread and two.
+  const Grid g = Grid::load(repo("maps/random-64-64-20.map"));
+  for (ActionModel model : {ActionModel::kMapf, ActionModel::kRotation}) {
+    DistTable dist(g, model);
+    for (double fixed_share : {0.0, 0.2}) {
+      SCOPED_TRACE(std::string(action_model_name(model)) + " fixed " + std::to_string(fixed_share));
+      long split1 = 0, split2 = 0, reached1 = 0, reached2 = 0;
+      const auto one = split_run(g, dist, model, 1200, 1, 40, fixed_share, &split1, &reached1);
+      const auto two = split_run(g, dist, model, 1200, 2, 40, fixed_share, &split2, &reached2);
+      EXPECT_EQ(split1, 40) << "every call over split_agents is split";
+      EXPECT_EQ(split2, 40);
+      EXPECT_GT(reached1, 0);
+      EXPECT_EQ(one, two) << "the strips do not depend on the thread count";
+    }
+  }
+}
+
+TEST(Pibt, SplitNeedsRoomForTwoStrips) {
+  // A map eight cells long has no room for two strips of four and a border: the call is planned whole.
+  const Grid g = Grid::from_rows({"....", "....", "....", "....", "....", "....", "....", "...."});
+  DistTable dist(g);
+  PibtOptions o;
+  o.split_agents = 1;
+  o.threads = 2;
+  PibtStep pibt(g, 6, 3, o);
+  const std::vector<Cell> pos = random_starts(g, 6, 3);
+  const std::vector<std::vector<Cell>> goals(6, std::vector<Cell>{g.cell(0, 0)});
+  WorldView w{g, dist, 0, pos, goals};
+  std::vector<Cell> next(6, kNoCell);
+  pibt.step(w, next);
+  EXPECT_EQ(pibt.split_steps(), 0);
+  EXPECT_FALSE(StepValidator(g, ActionModel::kMapf).check(pos, next));
+}
