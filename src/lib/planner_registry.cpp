@@ -121,8 +121,6 @@ GdRhcrConfig gd_rhcr_config(const PlannerParams& v, uint64_t seed) {
   c.max_density = v.real("max-density");
   c.density_margin = v.integer("density-margin");
   c.pibt = pibt_options(v);
-  c.pibt.split_agents = v.integer("pibt-split");
-  c.pibt.threads = c.threads;
   c.guidance = v.text("guidance") == "local";
   c.forecast = forecast_config(v);
   c.lg = guidance_config(v, seed);

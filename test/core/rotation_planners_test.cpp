@@ -221,7 +221,9 @@ TEST(RotationPlanners, CellsStopAtTheStepBudgetAndTheOthersStepAheadOrWait) {
   opt.steps = 20;
   opt.action_model = ActionModel::kRotation;
   long stopped = 0;
-  for (const char* budget : {"1e-9", "0.001", "0.0015", "0.002", "0.003", "0.005"}) {
+  // (The larger budgets stop PIBT in the slower builds: under the sanitizers the work before PIBT
+  // alone passes the smaller ones, and those calls plan everyone.)
+  for (const char* budget : {"1e-9", "0.001", "0.0015", "0.002", "0.003", "0.005", "0.01", "0.02", "0.05"}) {
     SCOPED_TRACE(std::string("step-budget ") + budget);
     Params p;
     p.set("rotation-pibt", "cells");
@@ -236,7 +238,7 @@ TEST(RotationPlanners, CellsStopAtTheStepBudgetAndTheOthersStepAheadOrWait) {
     if (std::string(budget) == "1e-9") EXPECT_EQ(stops, 0) << "calls begun past the deadline plan everyone";
     else stopped += stops;
   }
-  EXPECT_GT(stopped, 0) << "no budget from 1 to 5 ms stopped PIBT over 1,500 agents";
+  EXPECT_GT(stopped, 0) << "no budget from 1 to 50 ms stopped PIBT over 1,500 agents";
 }
 
 namespace {
