@@ -633,7 +633,6 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"density_fallbacks", density_fallbacks_},
           {"budget_skips", budget_skips_},
           {"secondary_deadline_stops", pibt_.deadline_stops()},
-          {"secondary_split_steps", pibt_.split_steps()},
           {"secondary_starts", pibt_.starts()},
           {"secondary_starts_won", pibt_.starts_won()},
           {"guidance_cut_short", guidance_ ? guidance_->cut_short() : 0},
