@@ -5,16 +5,9 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
-#include <stdexcept>
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/partitioner.h>
-#include <tbb/task_arena.h>
 
 #include "gdrhcr/mapf_in_rotation.hpp"
 #include "gdrhcr/task_stream.hpp"
-#include "tsan_annotations.hpp"
 
 namespace gdrhcr {
 
@@ -22,11 +15,6 @@ namespace {
 constexpr int kFree = -1;
 constexpr int kFixed = -2;  // a cell held by an agent PIBT does not move this call
 }  // namespace
-
-struct PibtStep::Arena {
-  explicit Arena(int threads) : arena(threads) {}
-  tbb::task_arena arena;
-};
 
 PibtStep::PibtStep(const Grid& grid, int num_agents, uint64_t seed, PibtOptions options)
     : grid_(grid),
@@ -37,16 +25,10 @@ PibtStep::PibtStep(const Grid& grid, int num_agents, uint64_t seed, PibtOptions 
       occupied_now_(grid.num_cells(), kFree),
       occupied_next_(grid.num_cells(), kFree),
       rows_(num_agents),
-      goal_of_(num_agents, kNoCell),
-      fixed_at_(grid.num_cells(), 0) {
+      goal_of_(num_agents, kNoCell) {
   std::uniform_real_distribution<double> tie(0.0, 1.0);
   for (auto& p : priority_) p = tie(rng_);
-  if (opt_.split_agents < 0) throw std::invalid_argument("pibt: split_agents must be >= 0");
-  if (opt_.threads < 1) throw std::invalid_argument("pibt: threads must be >= 1");
-  if (opt_.split_agents > 0 && opt_.threads > 1) arena_ = std::make_shared<Arena>(opt_.threads);
 }
-
-PibtStep::~PibtStep() = default;
 
 // Priority = time since the agent last reached a goal, plus its fixed tie-breaker in [0, 1).
 // Reaching a goal shows as standing on it, or (lifelong runs, where the next goal is handed out
@@ -280,29 +262,36 @@ void PibtStep::push_all(const WorldView& world, std::vector<Cell>& next,
   // Agents outside this call keep their moves; their cells at t and t+1 are off limits, which
   // rules out both vertex and swap conflicts with them.
   for (auto& [from, to] : fixed_moves) {
-    if (from != kNoCell) occupied_next_[from] = kFixed, fixed_at_[from] = 1;
-    if (to != kNoCell) occupied_next_[to] = kFixed, fixed_at_[to] = 1;
+    if (from != kNoCell) occupied_next_[from] = kFixed;
+    if (to != kNoCell) occupied_next_[to] = kFixed;
   }
   if (world.blocked)  // blocked cells (a late robot still leaving them): nobody enters
-    for (Cell c : *world.blocked) occupied_next_[c] = kFixed, fixed_at_[c] = 1;
+    for (Cell c : *world.blocked) occupied_next_[c] = kFixed;
   sort_by_priority();
   // A call that begins past its deadline plans everyone: the step is over its budget whatever PIBT
   // does, and stopping at once would leave all but kDeadlineStride agents to step ahead or wait.
   const bool timed = deadline_ != std::chrono::steady_clock::time_point::max() &&
                      std::chrono::steady_clock::now() < deadline_;
-  if (!push_in_strips(world, timed, next) && push_in_order(world, order_.data(), order_.size(), timed, next, rng_))
-    ++deadline_stops_;
+  for (size_t k = 0; k < order_.size(); ++k) {
+    if (timed && k >= kDeadlineStride && k % kDeadlineStride == 0 && std::chrono::steady_clock::now() >= deadline_) {
+      ++deadline_stops_;  // the agents no push has reached take a cheap step
+      for (; k < order_.size(); ++k)
+        if (next[order_[k]] == kNoCell) step_ahead(world, order_[k], next);
+      break;
+    }
+    if (next[order_[k]] == kNoCell) push(world, order_[k], -1, next);
+  }
   // Reset the scratch tables touched this call, so the next call starts clean in O(agents).
   for (int i : order_) {
     occupied_now_[world.positions[i]] = kFree;
     occupied_next_[next[i]] = kFree;
   }
   for (auto& [from, to] : fixed_moves) {
-    if (from != kNoCell) occupied_next_[from] = kFree, fixed_at_[from] = 0;
-    if (to != kNoCell) occupied_next_[to] = kFree, fixed_at_[to] = 0;
+    if (from != kNoCell) occupied_next_[from] = kFree;
+    if (to != kNoCell) occupied_next_[to] = kFree;
   }
   if (world.blocked)
-    for (Cell c : *world.blocked) occupied_next_[c] = kFree, fixed_at_[c] = 0;
+    for (Cell c : *world.blocked) occupied_next_[c] = kFree;
 }
 
 // order_ by priority, highest first, equal priorities in their order (a stable sort, on keys read
@@ -313,77 +302,6 @@ void PibtStep::sort_by_priority() {
   std::sort(keyed_.begin(), keyed_.end());
   for (size_t k = 0; k < keyed_.size(); ++k) keyed_[k].second = order_[keyed_[k].second];
   for (size_t k = 0; k < keyed_.size(); ++k) order_[k] = keyed_[k].second;
-}
-
-// One push per agent of `agents` (in priority order) not moved yet. With `timed`, past the
-// deadline (checked every kDeadlineStride agents) the rest step ahead; returns whether it stopped.
-bool PibtStep::push_in_order(const WorldView& world, const int* agents, size_t count, bool timed,
-                             std::vector<Cell>& next, std::mt19937_64& rng) {
-  for (size_t k = 0; k < count; ++k) {
-    if (timed && k >= kDeadlineStride && k % kDeadlineStride == 0 && std::chrono::steady_clock::now() >= deadline_) {
-      for (; k < count; ++k)  // the agents no push has reached take a cheap step
-        if (next[agents[k]] == kNoCell) step_ahead(world, agents[k], next);
-      return true;
-    }
-    if (next[agents[k]] == kNoCell) push(world, agents[k], -1, next, rng);
-  }
-  return false;
-}
-
-// split_agents (see PibtOptions): the border agents first, then the strips at once. Returns false
-// (nothing planned) when the call is too small or the map too narrow for two strips.
-bool PibtStep::push_in_strips(const WorldView& world, bool timed, std::vector<Cell>& next) {
-  if (opt_.split_agents <= 0 || order_.size() < static_cast<size_t>(opt_.split_agents)) return false;
-  const bool by_x = grid_.width() >= grid_.height();
-  auto coord = [&](int i) { return by_x ? grid_.x_of(world.positions[i]) : grid_.y_of(world.positions[i]); };
-  // Borders at the quantiles of the agents' coordinates; a border X holds the agents at X-1 and X,
-  // so the strips on either side (up to X-2, from X+1) are three cells apart: no cell is next to
-  // agents of two strips. Strips narrower than kMinStrip are merged with the next.
-  constexpr int kMinStrip = 4;
-  std::vector<int> at(order_.size());
-  std::vector<size_t> below(by_x ? grid_.width() + 1 : grid_.height() + 1, 0);  // agents below each line
-  for (size_t k = 0; k < order_.size(); ++k) at[k] = coord(order_[k]), ++below[at[k] + 1];
-  for (size_t x = 1; x < below.size(); ++x) below[x] += below[x - 1];
-  const int lo = at[std::min_element(at.begin(), at.end()) - at.begin()];
-  const int hi = at[std::max_element(at.begin(), at.end()) - at.begin()];
-  std::vector<int> borders;
-  for (int p = 1, x = 0; p < kSplitParts; ++p) {
-    while (below[x + 1] <= order_.size() * p / kSplitParts) ++x;  // the line holding that quantile
-    if ((borders.empty() ? x - 1 - lo : x - borders.back() - 2) >= kMinStrip) borders.push_back(x);
-  }
-  while (!borders.empty() && hi - borders.back() < kMinStrip) borders.pop_back();
-  if (borders.empty()) return false;
-  const int parts = static_cast<int>(borders.size()) + 1;
-  ++split_steps_;
-  std::vector<int> seam;
-  std::vector<std::vector<int>> strip(parts);
-  for (size_t k = 0; k < order_.size(); ++k) {  // in priority order
-    const int s = static_cast<int>(std::upper_bound(borders.begin(), borders.end(), at[k] + 1) - borders.begin());
-    (s > 0 && at[k] <= borders[s - 1] ? seam : strip[s]).push_back(order_[k]);
-  }
-  bool stopped = push_in_order(world, seam.data(), seam.size(), timed, next, rng_);
-  std::vector<std::mt19937_64> rngs;
-  for (int p = 0; p < parts; ++p) rngs.emplace_back(rng_());
-  std::vector<uint8_t> stops(parts, 0);
-  auto run = [&](int p) { stops[p] = push_in_order(world, strip[p].data(), strip[p].size(), timed, next, rngs[p]); };
-  if (arena_) {
-    GDRHCR_TSAN_RELEASE(&strip);
-    arena_->arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<int>(0, parts, 1),
-                        [&](const tbb::blocked_range<int>& r) {
-                          GDRHCR_TSAN_ACQUIRE(&strip);
-                          for (int p = r.begin(); p != r.end(); ++p) run(p);
-                          GDRHCR_TSAN_RELEASE(&strip);
-                        },
-                        tbb::simple_partitioner());
-    });
-    GDRHCR_TSAN_ACQUIRE(&strip);
-  } else {
-    for (int p = 0; p < parts; ++p) run(p);
-  }
-  for (uint8_t s : stops) stopped = stopped || s;
-  if (stopped) ++deadline_stops_;
-  return true;
 }
 
 // An agent past the deadline: into the cell ahead (rotation: the one it faces; mapf: its nearest
@@ -427,12 +345,11 @@ void PibtStep::execute_with_turns(const WorldView& world, std::vector<Cell>& nex
 // nobody stands on, then at random. Without rotation_commit, a pushed agent pays
 // rotation_push_turn_cost more for a cell it must turn towards: it stays this step, and so does its
 // pusher.
-void PibtStep::order_candidates_with_turns(const WorldView& world, int ai, bool pushed, Cell* cand, int m,
-                                           std::mt19937_64& rng) {
+void PibtStep::order_candidates_with_turns(const WorldView& world, int ai, bool pushed, Cell* cand, int m) {
   const DistRow& row = *rows_[ai];
   const Cell pref = preferred_ ? (*preferred_)[ai] : kNoCell;
   const Pose at = world.pose(ai);
-  std::shuffle(cand, cand + m, rng);
+  std::shuffle(cand, cand + m, rng_);
   const bool free_first = opt_.tie_break != PibtOptions::TieBreak::kRandom;
   const int pusher_waits = pushed && !opt_.rotation_commit ? opt_.rotation_push_turn_cost : 0;  // per turning cell
   long long key[5];
@@ -449,12 +366,11 @@ void PibtStep::order_candidates_with_turns(const WorldView& world, int ai, bool 
 
 // Candidates: the neighbours and staying put, the preferred cell first, then nearest to the
 // goal; among equals (tie_break kFreeFirst) a cell nobody stands on, then a random order.
-void PibtStep::order_candidates(const WorldView& world, int ai, bool pushed, Cell* cand, int m,
-                                std::mt19937_64& rng) {
-  if (world.rotation()) return order_candidates_with_turns(world, ai, pushed, cand, m, rng);
+void PibtStep::order_candidates(const WorldView& world, int ai, bool pushed, Cell* cand, int m) {
+  if (world.rotation()) return order_candidates_with_turns(world, ai, pushed, cand, m);
   const DistRow& row = *rows_[ai];
   const Cell pref = preferred_ ? (*preferred_)[ai] : kNoCell;
-  std::shuffle(cand, cand + m, rng);
+  std::shuffle(cand, cand + m, rng_);
   const bool free_first = opt_.tie_break != PibtOptions::TieBreak::kRandom;
   // A stable insertion sort on keys read once (std::stable_sort allocates a buffer per call).
   int key[5];
@@ -468,13 +384,13 @@ void PibtStep::order_candidates(const WorldView& world, int ai, bool pushed, Cel
 }
 
 
-bool PibtStep::push(const WorldView& world, int ai, int aj, std::vector<Cell>& next, std::mt19937_64& rng) {
+bool PibtStep::push(const WorldView& world, int ai, int aj, std::vector<Cell>& next) {
   const Cell here = world.positions[ai];
   Cell cand[5];
   int m = 0;
   for (Cell c : grid_.neighbours(here)) cand[m++] = c;
   cand[m++] = here;
-  order_candidates(world, ai, aj >= 0, cand, m, rng);
+  order_candidates(world, ai, aj >= 0, cand, m);
   // Swap: the agent on the best cell must get past this one; walk away and pull it along.
   int partner = -1;
   if (swap_allowed(world, ai)) {
@@ -492,13 +408,13 @@ bool PibtStep::push(const WorldView& world, int ai, int aj, std::vector<Cell>& n
     if (ak >= 0 && ak != ai && (ak == aj || next[ak] == here)) continue;
     occupied_next_[u] = ai;
     next[ai] = u;
-    if (ak >= 0 && ak != ai && next[ak] == kNoCell && !push(world, ak, ai, next, rng)) continue;
+    if (ak >= 0 && ak != ai && next[ak] == kNoCell && !push(world, ak, ai, next)) continue;
     // Pull the swap partner into the cell we leave.
     if (partner >= 0 && k == 0 && u != here && next[partner] == kNoCell &&
         occupied_next_[here] == kFree && world.positions[partner] != u) {
       occupied_next_[here] = partner;
       next[partner] = here;
-      ++swaps_.n;
+      ++swaps_;
     }
     return true;
   }
@@ -521,7 +437,7 @@ void PibtStep::retreat_order(Cell here, Cell* cand, int m) const {
 int PibtStep::passable_neighbours(Cell at, Cell except, Cell* other) const {
   int count = 0;
   for (Cell u : grid_.neighbours(at)) {
-    if (u == except || fixed_at_[u]) continue;
+    if (u == except || occupied_next_[u] == kFixed) continue;
     const int a = occupied_now_[u];
     if (a >= 0) {
       const auto nb = grid_.neighbours(u);

@@ -88,8 +88,6 @@ std::unique_ptr<Planner> make_gd_rhcr(const PlannerParams& v, const Grid& grid, 
   rollout.rotation = PibtOptions::Rotation::kCells;
   rollout.rotation_commit = false;
   rollout.rotation_starts = 1;
-  rollout.split_agents = v.integer("pibt-split");
-  rollout.threads = c.threads;
   return std::make_unique<WindowLns>(std::move(planner), grid, n, c, rollout, m);
 }
 

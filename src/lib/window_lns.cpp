@@ -103,7 +103,6 @@ nlohmann::json WindowLns::params() const {
   j["lns_window"] = cfg_.window;
   j["lns_neighbourhood"] = cfg_.neighbourhood;
   j["lns_iterations"] = cfg_.iterations;
-  j["pibt_split"] = pibt_.options().split_agents;
   return j;
 }
 
@@ -112,7 +111,6 @@ nlohmann::json WindowLns::stats() const {
   j["lns_steps"] = steps_searched_;
   j["lns_steps_cut"] = rollouts_cut_;
   j["lns_steps_skipped"] = rollouts_skipped_;
-  j["lns_rollout_split_steps"] = pibt_.split_steps();
   j["lns_rollout_step_ms"] = 1000 * rollout_step_s_;
   j["lns_steps_ended_stale"] = stale_stops_;
   long tried = 0, kept = 0, gained = 0, failed = 0;

@@ -31,9 +31,7 @@
 // first. Swap emulation is off in this model (either way, it held agents back; docs/results.md).
 #pragma once
 
-#include <atomic>
 #include <chrono>
-#include <memory>
 #include <random>
 #include <vector>
 
@@ -100,16 +98,6 @@ struct PibtOptions {
   // occupants of a dead end can leave only through the cell the newcomer queues in (after WPPL,
   // which parks such agents for good; here the goal is only deferred).
   int dead_end_wait = 0;
-  // Calls over cells moving at least this many agents (0: never) are split into kSplitParts strips
-  // across the map's longer side, at the quantiles of the agents' coordinates, planned at once on
-  // `threads` threads. The agents on the two lines of each border between strips are planned
-  // first, in priority order; then each strip's agents, in priority order. Two strips' agents are
-  // three cells apart or more, so no cell is next to both and no push, claim or swap of one strip
-  // meets another's. The strips do not depend on the thread count, so a seed fixes the run; the
-  // step is PIBT's with the border agents first. Two strips: with eight, the border agents going
-  // first (4% of warehouse_large's fleet) cost 5-10% of its goals (docs/results.md, session 33).
-  int split_agents = 0;
-  int threads = 1;
 };
 
 // PIBT as published (the paper configuration and RHCR's fallback): no swap.
@@ -138,7 +126,7 @@ class PibtStep {
   // Agent i's current priority (larger goes first), for tests and diagnostics.
   double priority(int i) const { return priority_[i]; }
   const PibtOptions& options() const { return opt_; }
-  long swaps() const { return swaps_.n; }
+  long swaps() const { return swaps_; }
   // The next step() stops planning agents at `deadline`. Over operations the check comes before
   // each agent, and those not planned by then keep their cells (wait), which is always valid: an
   // agent only ever moves into a cell whose agent was planned first. Over cells it comes before
@@ -149,22 +137,15 @@ class PibtStep {
   // everyone (its step is over budget anyway). One step only (cleared by step()).
   void set_deadline(std::chrono::steady_clock::time_point deadline) { deadline_ = deadline; }
   long deadline_stops() const { return deadline_stops_; }  // steps stopped so
-  long split_steps() const { return split_steps_; }        // split_agents: calls planned in strips
   long starts() const { return starts_; }            // rotation_starts: PIBT runs made
   long starts_won() const { return starts_won_; }    // ... configurations a shaken run gave
   static constexpr int kStartBox = 4;
   static constexpr double kStartNoise = 5.0;
   static constexpr int kOpSteps = 3;  // actions per operation in the rotation model
   static constexpr int kDeadlineStride = 64;
-  static constexpr int kSplitParts = 2;
-  ~PibtStep();
 
  private:
-  bool push(const WorldView& world, int ai, int aj, std::vector<Cell>& next, std::mt19937_64& rng);
-  bool push_in_order(const WorldView& world, const int* agents, size_t count, bool timed, std::vector<Cell>& next,
-                     std::mt19937_64& rng);
-  bool push_in_strips(const WorldView& world, bool timed, std::vector<Cell>& next);
-  void sort_by_priority();
+  bool push(const WorldView& world, int ai, int aj, std::vector<Cell>& next);
   void step_ahead(const WorldView& world, int ai, std::vector<Cell>& next);
 
   // Rotation model: operations (see above; pibt_operations.cpp).
@@ -194,16 +175,15 @@ class PibtStep {
   long op_plans_ = 0;
   std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
   long deadline_stops_ = 0;
-  long split_steps_ = 0;
-  void order_candidates(const WorldView& world, int ai, bool pushed, Cell* cand, int m, std::mt19937_64& rng);
+  void order_candidates(const WorldView& world, int ai, bool pushed, Cell* cand, int m);
   void push_all(const WorldView& world, std::vector<Cell>& next,
                 const std::vector<std::pair<Cell, Cell>>& fixed_moves);
+  void sort_by_priority();
   void choose_configuration(const WorldView& world, std::vector<Cell>& next);
   void shake_box(const WorldView& world, const std::vector<double>& base, std::mt19937_64& shake);
   long distance_gain(const WorldView& world, const std::vector<Cell>& next) const;
   void execute_with_turns(const WorldView& world, std::vector<Cell>& next) const;
-  void order_candidates_with_turns(const WorldView& world, int ai, bool pushed, Cell* cand, int m,
-                                   std::mt19937_64& rng);
+  void order_candidates_with_turns(const WorldView& world, int ai, bool pushed, Cell* cand, int m);
   int swap_partner(const WorldView& world, int ai, Cell best) const;
   void retreat_order(Cell here, Cell* cand, int m) const;
   bool needs_swap(Cell pusher_at, Cell puller_at, const DistRow& pusher_row,
@@ -247,16 +227,7 @@ class PibtStep {
   const std::vector<uint8_t>* immovable_ = nullptr;
   std::vector<int> order_;
   std::vector<std::pair<double, int>> keyed_;  // sort_by_priority's scratch
-  // Copyable (the motion forecast rolls a copy), and counted from the strips at once.
-  struct SwapCount {
-    std::atomic<long> n{0};
-    SwapCount() = default;
-    SwapCount(const SwapCount& o) : n(o.n.load()) {}
-    SwapCount& operator=(const SwapCount& o) { return n = o.n.load(), *this; }
-  } swaps_;
-  std::vector<uint8_t> fixed_at_;  // per cell: held by a move outside the call or blocked (kFixed), read by the swap's walks
-  struct Arena;
-  std::shared_ptr<Arena> arena_;   // split_agents with threads > 1 (a copy shares it)
+  long swaps_ = 0;
   long starts_ = 0, starts_won_ = 0;
 };
 
