@@ -25,6 +25,7 @@ PibtStep::PibtStep(const Grid& grid, int num_agents, uint64_t seed, PibtOptions 
       occupied_now_(grid.num_cells(), kFree),
       occupied_next_(grid.num_cells(), kFree),
       rows_(num_agents),
+      row_goal_(num_agents, kNoCell),
       goal_of_(num_agents, kNoCell) {
   std::uniform_real_distribution<double> tie(0.0, 1.0);
   for (auto& p : priority_) p = tie(rng_);
@@ -145,7 +146,8 @@ long PibtStep::distance_gain(const WorldView& world, const std::vector<Cell>& ne
   for (int i : order_) {
     const Pose at = world.pose(i);
     const Heading h = next[i] == at.cell ? at.heading : heading_of_move(grid_, at.cell, next[i]);
-    gain += std::min(rows_[i]->at(at.cell, at.heading), 1 << 24) - std::min(rows_[i]->at(next[i], h), 1 << 24);
+    const int* d = &near_[static_cast<size_t>(i) * kNear];
+    gain += std::min(d[kNumHeadings], 1 << 24) - std::min(next[i] == at.cell ? d[kNumHeadings] : d[h], 1 << 24);
   }
   return gain;
 }
@@ -204,6 +206,7 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
     std::uniform_real_distribution<double> tie(0.0, 1.0);
     while (static_cast<int>(priority_.size()) < n) priority_.push_back(tie(rng_));
     rows_.resize(n);
+    row_goal_.resize(n, kNoCell);
     goal_of_.resize(n, kNoCell);
     last_goal_.resize(n, kNoCell);
   }
@@ -214,6 +217,7 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   immovable_ = world.immovable;
   if (table_id_ != world.dist.id()) {  // rows kept from another table: drop them
     for (auto& r : rows_) r.reset();
+    std::fill(row_goal_.begin(), row_goal_.end(), kNoCell);
     table_id_ = world.dist.id();
   }
   order_.clear();
@@ -223,16 +227,21 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   } else {
     order_ = agents;
   }
-  for (int i : order_) {
+  for (size_t k = 0; k < order_.size(); ++k) {
+    const int i = order_[k];
+    if (k + kNearAhead < order_.size())  // each agent's goal list is a cache miss of its own
+      __builtin_prefetch(world.goals[order_[k + kNearAhead]].data());
     const Cell g = goal_now(world, i);
     update_priority(world, i, g);
     if (world.rotation()) update_standing(world, i);  // only the rotation model's swap reads it
     goal_of_[i] = g;
-    if (!rows_[i] || rows_[i]->goal() != g) rows_[i] = world.dist.row(g);
+    if (row_goal_[i] != g) rows_[i] = world.dist.row(g), row_goal_[i] = g;
     occupied_now_[world.positions[i]] = i;
     next[i] = kNoCell;
   }
-  if (world.rotation() && opt_.rotation == PibtOptions::Rotation::kOperations) {
+  const bool operations = world.rotation() && opt_.rotation == PibtOptions::Rotation::kOperations;
+  if (!operations) near_distances(world);
+  if (operations) {
     plan_operations(world, next, fixed_moves);
     for (int i : order_) occupied_now_[world.positions[i]] = kFree;
   } else if (!carry_on(world, next, fixed_moves)) {
@@ -294,6 +303,47 @@ void PibtStep::push_all(const WorldView& world, std::vector<Cell>& next,
     for (Cell c : *world.blocked) occupied_next_[c] = kFree;
 }
 
+// Each agent's distance from its cell (rotation: facing its heading) and from each 4-neighbour
+// (facing the way the move there leaves it), read from its row once per call, in one pass that
+// fetches the rows of the agents kNearAhead and 2 x kNearAhead further on (the row object, then the
+// entries around the cell). With thousands of agents every row read is a cache miss; taken one at
+// a time, inside the pushes, they were most of PIBT's time.
+void PibtStep::near_distances(const WorldView& world) {
+  if (near_.size() < priority_.size() * kNear) near_.resize(priority_.size() * kNear);
+  const bool rot = world.rotation();
+  const size_t n = order_.size();
+  const int w = grid_.width();
+  for (size_t k = 0; k < n; ++k) {
+    if (k + 2 * kNearAhead < n) {
+      const char* object = reinterpret_cast<const char*>(rows_[order_[k + 2 * kNearAhead]].get());
+      __builtin_prefetch(object);
+      __builtin_prefetch(object + 64);
+    }
+    if (k + kNearAhead < n) {
+      const int a = order_[k + kNearAhead];
+      const Cell c = world.positions[a];
+      rows_[a]->prefetch(c);
+      if (c >= w) rows_[a]->prefetch(c - w);
+      if (c + w < grid_.num_cells()) rows_[a]->prefetch(c + w);
+    }
+    const int i = order_[k];
+    const DistRow& row = *rows_[i];
+    const Cell here = world.positions[i];
+    int* d = &near_[static_cast<size_t>(i) * kNear];
+    for (Heading h = 0; h < kNumHeadings; ++h) {
+      const Cell c = forward_cell(grid_, here, h);
+      d[h] = c == kNoCell ? kUnreachable : rot ? row.at(c, h) : row[c];
+    }
+    d[kNumHeadings] = rot ? row.at(here, (*world.headings)[i]) : row[here];
+  }
+}
+
+// Agent i's distance from cell c, here or a 4-neighbour of its cell (near_distances).
+int PibtStep::near(int i, Cell here, Cell c) const {
+  const int* d = &near_[static_cast<size_t>(i) * kNear];
+  return c == here ? d[kNumHeadings] : d[heading_of_move(grid_, here, c)];
+}
+
 // order_ by priority, highest first, equal priorities in their order (a stable sort, on keys read
 // once: with 10,000 agents an indirect comparison costs a cache miss each).
 void PibtStep::sort_by_priority() {
@@ -308,17 +358,17 @@ void PibtStep::sort_by_priority() {
 // neighbour) when nobody stands there or has claimed it and it is nearer the goal, else it waits.
 // A few reads of its row, against PIBT's candidates and pushes; valid, since the cell is empty now.
 void PibtStep::step_ahead(const WorldView& world, int ai, std::vector<Cell>& next) {
-  const DistRow& row = *rows_[ai];
   const Cell here = world.positions[ai];
   Cell to = here;
   if (world.rotation()) {
     const Heading h = (*world.headings)[ai];
     const Cell f = forward_cell(grid_, here, h);
-    if (f != kNoCell && row.at(f, h) < row.at(here, h)) to = f;
+    if (f != kNoCell && near(ai, here, f) < near(ai, here, here)) to = f;
   } else {
-    int best = row[here];
+    int best = near(ai, here, here);
     for (Cell c : grid_.neighbours(here))
-      if (row[c] < best && occupied_now_[c] == kFree && occupied_next_[c] == kFree) best = row[c], to = c;
+      if (near(ai, here, c) < best && occupied_now_[c] == kFree && occupied_next_[c] == kFree)
+        best = near(ai, here, c), to = c;
   }
   if (to != here && (occupied_now_[to] != kFree || occupied_next_[to] != kFree)) to = here;
   occupied_next_[to] = ai;
@@ -346,7 +396,6 @@ void PibtStep::execute_with_turns(const WorldView& world, std::vector<Cell>& nex
 // rotation_push_turn_cost more for a cell it must turn towards: it stays this step, and so does its
 // pusher.
 void PibtStep::order_candidates_with_turns(const WorldView& world, int ai, bool pushed, Cell* cand, int m) {
-  const DistRow& row = *rows_[ai];
   const Cell pref = preferred_ ? (*preferred_)[ai] : kNoCell;
   const Pose at = world.pose(ai);
   std::shuffle(cand, cand + m, rng_);
@@ -357,7 +406,7 @@ void PibtStep::order_candidates_with_turns(const WorldView& world, int ai, bool 
     const Cell c = cand[k];
     const Heading h = c == at.cell ? at.heading : heading_of_move(grid_, at.cell, c);
     const int turns = turn_steps(at.heading, h);
-    const long long cost = std::min(row.at(c, h), 1 << 24) + turns + 1 + (turns > 0 ? pusher_waits : 0);
+    const long long cost = std::min(near(ai, at.cell, c), 1 << 24) + turns + 1 + (turns > 0 ? pusher_waits : 0);
     key[k] = (c == pref ? 0LL : 1LL << 40) + cost * 8 + turns * 2 + (free_first && occupied_now_[c] != kFree ? 1 : 0);
   }
   for (int k = 1; k < m; ++k)
@@ -368,15 +417,15 @@ void PibtStep::order_candidates_with_turns(const WorldView& world, int ai, bool 
 // goal; among equals (tie_break kFreeFirst) a cell nobody stands on, then a random order.
 void PibtStep::order_candidates(const WorldView& world, int ai, bool pushed, Cell* cand, int m) {
   if (world.rotation()) return order_candidates_with_turns(world, ai, pushed, cand, m);
-  const DistRow& row = *rows_[ai];
   const Cell pref = preferred_ ? (*preferred_)[ai] : kNoCell;
+  const Cell here = world.positions[ai];
   std::shuffle(cand, cand + m, rng_);
   const bool free_first = opt_.tie_break != PibtOptions::TieBreak::kRandom;
   // A stable insertion sort on keys read once (std::stable_sort allocates a buffer per call).
   int key[5];
   for (int k = 0; k < m; ++k) {
     const Cell c = cand[k];
-    key[k] = (c == pref ? 0 : 1 << 30) + std::min(row[c], (1 << 24) - 1) * 2 +
+    key[k] = (c == pref ? 0 : 1 << 30) + std::min(near(ai, here, c), (1 << 24) - 1) * 2 +
              (free_first && occupied_now_[c] != kFree ? 1 : 0);
   }
   for (int k = 1; k < m; ++k)

@@ -179,6 +179,8 @@ class PibtStep {
   void push_all(const WorldView& world, std::vector<Cell>& next,
                 const std::vector<std::pair<Cell, Cell>>& fixed_moves);
   void sort_by_priority();
+  void near_distances(const WorldView& world);
+  int near(int i, Cell here, Cell c) const;
   void choose_configuration(const WorldView& world, std::vector<Cell>& next);
   void shake_box(const WorldView& world, const std::vector<double>& base, std::mt19937_64& shake);
   long distance_gain(const WorldView& world, const std::vector<Cell>& next) const;
@@ -208,6 +210,11 @@ class PibtStep {
   // Each agent's goal row, kept across calls while its goal stays (one hash look-up per agent
   // per step saved at 10,000 agents); at most one row per agent is held, as during a step.
   std::vector<std::shared_ptr<const DistRow>> rows_;
+  std::vector<Cell> row_goal_;  // the goal of each agent's row (kNoCell: none), read without the row
+  static constexpr int kNear = kNumHeadings + 1;
+  static constexpr size_t kNearAhead = 8;  // agents (near_distances)
+  // This call's near_distances: per agent, from the 4-neighbour each heading faces, then its cell.
+  std::vector<int> near_;
   uint64_t table_id_ = 0;  // the DistTable those rows came from
   std::vector<Cell> goal_of_;                         // each agent's goal, this step
   // Per agent: steps it has stood in its cell, counted once per timestep (rotation_swap_wait).
