@@ -212,7 +212,7 @@ class PibtStep {
   std::vector<std::shared_ptr<const DistRow>> rows_;
   std::vector<Cell> row_goal_;  // the goal of each agent's row (kNoCell: none), read without the row
   static constexpr int kNear = kNumHeadings + 1;
-  static constexpr size_t kNearAhead = 8;  // agents (near_distances)
+  static constexpr size_t kNearAhead = 32;  // agents (near_distances)
   // This call's near_distances: per agent, from the 4-neighbour each heading faces, then its cell.
   std::vector<int> near_;
   uint64_t table_id_ = 0;  // the DistTable those rows came from
