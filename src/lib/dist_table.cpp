@@ -3,6 +3,7 @@
 #include "tsan_annotations.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <cmath>
 #include <stdexcept>
 
@@ -183,18 +184,27 @@ void DistRow::bfs_rotation(int32_t goal_slot) {
       if (v != UINT32_MAX) most = std::max(most, v);
     narrow_ = most < 0xFFFF;
   }
-  if (narrow_) d16_.assign(size_t(f) + 1, 0xFFFF);
-  else d32_.assign(size_t(f) + 1, UINT32_MAX);
-  excess_.assign(size_t(f) + 1, 0);
+  if (narrow_) {
+    packed_.assign(3 * (size_t(f) + 1), 0);
+    for (size_t k = 0; k < packed_.size(); k += 3) packed_[k] = packed_[k + 1] = 0xFF;
+  } else {
+    d32_.assign(size_t(f) + 1, UINT32_MAX);
+    excess_.assign(size_t(f) + 1, 0);
+  }
   for (int32_t s = 0; s < f; ++s) {
     const uint32_t* ds = &d[size_t(s) * 4];
     const uint32_t least = std::min(std::min(ds[0], ds[1]), std::min(ds[2], ds[3]));
     if (least == UINT32_MAX) continue;
-    if (narrow_) d16_[s] = static_cast<uint16_t>(least);
-    else d32_[s] = least;
     uint8_t bits = 0;
     for (int h = 0; h < kNumHeadings; ++h) bits |= static_cast<uint8_t>((ds[h] - least) << (2 * h));
-    excess_[s] = bits;
+    if (narrow_) {
+      const uint16_t v = static_cast<uint16_t>(least);
+      std::memcpy(&packed_[3 * size_t(s)], &v, sizeof v);
+      packed_[3 * size_t(s) + 2] = bits;
+    } else {
+      d32_[s] = least;
+      excess_[s] = bits;
+    }
   }
 }
 
@@ -255,7 +265,7 @@ void DistRow::weighted_rotation(int32_t goal_slot, std::vector<uint32_t>& d) {
 
 size_t DistRow::bytes() const {
   return sizeof(DistRow) + d16_.capacity() * sizeof(uint16_t) + d32_.capacity() * sizeof(uint32_t) +
-         excess_.capacity();
+         excess_.capacity() + packed_.capacity();
 }
 
 DistTable::DistTable(const Grid& grid, size_t budget_bytes)
