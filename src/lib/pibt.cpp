@@ -356,7 +356,7 @@ void PibtStep::sort_by_priority() {
 
 // An agent past the deadline: into the cell ahead (rotation: the one it faces; mapf: its nearest
 // neighbour) when nobody stands there or has claimed it and it is nearer the goal, else it waits.
-// A few reads of its row, against PIBT's candidates and pushes; valid, since the cell is empty now.
+// A look at its near distances, against PIBT's candidates and pushes; valid, since the cell is empty now.
 void PibtStep::step_ahead(const WorldView& world, int ai, std::vector<Cell>& next) {
   const Cell here = world.positions[ai];
   Cell to = here;
