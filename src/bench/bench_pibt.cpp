@@ -39,13 +39,14 @@ class TimedPlanner : public Planner {
   Planner& inner_;
 };
 
-void print_times(std::vector<double> t) {
+// One line: ms per step, mean and percentiles, then `note`.
+void print_times(std::vector<double> t, const char* note) {
   std::sort(t.begin(), t.end());
   double sum = 0;
   for (double x : t) sum += x;
   auto pct = [&](double p) { return t[std::min(t.size() - 1, size_t(p * t.size()))] * 1e3; };
-  std::printf("  ms per step: mean %.3f  p50 %.3f  p99 %.3f  max %.3f\n", sum / t.size() * 1e3, pct(0.5), pct(0.99),
-              t.back() * 1e3);
+  std::printf("  ms per step: mean %.3f  p50 %.3f  p99 %.3f  max %.3f%s\n", sum / t.size() * 1e3, pct(0.5), pct(0.99),
+              t.back() * 1e3, note);
 }
 
 int run_lorr(const std::string& path, int steps, uint64_t seed, int budget_mb) {
@@ -69,7 +70,7 @@ int run_lorr(const std::string& path, int steps, uint64_t seed, int budget_mb) {
   SimResult r = run_simulation(grid, dist, tasks, timed, problem.starts, opt);
   std::printf("bench_pibt lorr-problem=%s agents=%d steps=%d seed=%llu (rotation, every row computed first)\n",
               path.c_str(), agents, steps, (unsigned long long)seed);
-  print_times(timed.times);
+  print_times(timed.times, "");
   std::printf("  goals %ld, collisions %ld\n", r.goals_reached, r.collisions);
   return 0;
 }
@@ -105,15 +106,9 @@ int main(int argc, char** argv) {
   SimOptions opt;
   opt.steps = steps;
   SimResult r = run_simulation(grid, dist, *tasks, timed, random_starts(grid, agents, seed), opt);
-  auto t = timed.times;
-  std::sort(t.begin(), t.end());
-  double sum = 0;
-  for (double x : t) sum += x;
-  auto pct = [&](double p) { return t[std::min(t.size() - 1, size_t(p * t.size()))] * 1e3; };
   std::printf("bench_pibt map=%s tasks=%s agents=%d steps=%d seed=%llu\n", map.c_str(),
               tasks_kind.c_str(), agents, steps, (unsigned long long)seed);
-  std::printf("  ms per step: mean %.3f  p50 %.3f  p99 %.3f  max %.3f  (target < 5 ms)\n",
-              sum / t.size() * 1e3, pct(0.5), pct(0.99), t.back() * 1e3);
+  print_times(timed.times, "  (target < 5 ms)");
   std::printf("  throughput %.3f (free flow %.3f, ratio %.2f), collisions 0, distance rows %zu (%.1f MB)\n",
               r.throughput, r.free_flow_throughput, r.throughput / r.free_flow_throughput,
               dist.cached_rows(), dist.cached_bytes() / 1e6);

@@ -144,10 +144,8 @@ void PibtStep::shake_box(const WorldView& world, const std::vector<double>& base
 long PibtStep::distance_gain(const WorldView& world, const std::vector<Cell>& next) const {
   long gain = 0;
   for (int i : order_) {
-    const Pose at = world.pose(i);
-    const Heading h = next[i] == at.cell ? at.heading : heading_of_move(grid_, at.cell, next[i]);
-    const int* d = &near_[static_cast<size_t>(i) * kNear];
-    gain += std::min(d[kNumHeadings], 1 << 24) - std::min(next[i] == at.cell ? d[kNumHeadings] : d[h], 1 << 24);
+    const Cell here = world.positions[i];
+    gain += std::min(near(i, here, here), 1 << 24) - std::min(near(i, here, next[i]), 1 << 24);
   }
   return gain;
 }
