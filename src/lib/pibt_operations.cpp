@@ -4,6 +4,7 @@
 #include <array>
 #include <chrono>
 #include <climits>
+#include <numeric>
 
 #include "gdrhcr/pibt.hpp"
 
@@ -12,166 +13,258 @@ namespace gdrhcr {
 namespace {
 constexpr int kFree = -1;
 constexpr int kFixed = -2;  // a cell held by an agent outside the call (or blocked)
+constexpr int kBlocked = -2;  // blocker(): a fixed cell, or more than one agent in the way
 
 using Operation = std::array<Action, PibtStep::kOpSteps>;
+constexpr Action kAll[4] = {Action::kForward, Action::kClockwise, Action::kCounterClockwise, Action::kWait};
+constexpr int kWww = 63;  // the code of wait, wait, wait (code: action k is kAll[code / 4^k % 4])
+
+bool is_turn(Action a) { return a == Action::kClockwise || a == Action::kCounterClockwise; }
+
+Operation decode(int code) {
+  Operation op{};
+  for (int k = 0; k < PibtStep::kOpSteps; ++k, code /= 4) op[k] = kAll[code % 4];
+  return op;
+}
 
 // Every sequence of kOpSteps actions except: a turn right after the opposite one (they cancel),
 // two counter-clockwise turns in a row (two clockwise ones reach the same state), and a turn as
 // the last action (the next step plans again; the same operation ending in a wait holds the same
-// cells).
-std::vector<Operation> make_operations() {
-  constexpr Action kAll[4] = {Action::kForward, Action::kClockwise, Action::kCounterClockwise, Action::kWait};
-  auto turn = [](Action a) { return a == Action::kClockwise || a == Action::kCounterClockwise; };
-  std::vector<Operation> ops;
-  Operation op{};
-  for (int code = 0; code < 64; ++code) {
-    for (int k = 0, c = code; k < PibtStep::kOpSteps; ++k, c /= 4) op[k] = kAll[c % 4];
-    bool keep = !turn(op[PibtStep::kOpSteps - 1]);
-    for (int k = 1; k < PibtStep::kOpSteps && keep; ++k)
-      keep = !(turn(op[k - 1]) && turn(op[k]) && (op[k] != op[k - 1] || op[k] == Action::kCounterClockwise));
-    if (keep) ops.push_back(op);
-  }
-  return ops;
+// cells). The operation carried on from one step to the next (its last actions, then a wait) is
+// kept by these rules.
+bool kept_operation(const Operation& op) {
+  if (is_turn(op[PibtStep::kOpSteps - 1])) return false;
+  for (int k = 1; k < PibtStep::kOpSteps; ++k)
+    if (is_turn(op[k - 1]) && is_turn(op[k]) && (op[k] != op[k - 1] || op[k] == Action::kCounterClockwise))
+      return false;
+  return true;
 }
 
-const std::vector<Operation>& operations() {
-  static const std::vector<Operation> ops = make_operations();
-  return ops;
+const std::vector<int>& operation_codes() {
+  static const std::vector<int> codes = [] {
+    std::vector<int> c;
+    for (int code = 0; code < 64; ++code)
+      if (kept_operation(decode(code))) c.push_back(code);
+    return c;
+  }();
+  return codes;
 }
-constexpr int kMaxOps = 64;
+
+// The operation left of `code` after its first action: the rest, then a wait.
+int carried_code(int code) { return code / 4 + 3 * 16; }
 }  // namespace
 
-void PibtStep::set_res(int k, Cell c, int v) {
-  int& slot = res(k, c);
-  undo_ints_.emplace_back(&slot, slot);
-  slot = v;
-}
-
-void PibtStep::reserve(int ai, const OpPath& p) {
-  undo_paths_.emplace_back(ai, op_path_[ai]);
-  op_path_[ai] = p;
-  for (int k = 1; k <= kOpSteps; ++k) set_res(k, p.cell[k], ai);
+void PibtStep::reserve(int ai) {
+  const OpPath& p = op_path_[ai];
+  for (int k = 1; k <= kOpSteps; ++k) res(k, p.cell[k]) = ai;
+  op_score_ += op_power_[ai] * (op_wait_cost_[ai] - op_cost_[ai]);
 }
 
 void PibtStep::release(int ai) {
   const OpPath& p = op_path_[ai];
   for (int k = 1; k <= kOpSteps; ++k)
-    if (res(k, p.cell[k]) == ai) set_res(k, p.cell[k], kFree);
+    if (res(k, p.cell[k]) == ai) res(k, p.cell[k]) = kFree;
+  op_score_ -= op_power_[ai] * (op_wait_cost_[ai] - op_cost_[ai]);
 }
 
-void PibtStep::rollback(size_t ints, size_t paths) {
-  while (undo_ints_.size() > ints) *undo_ints_.back().first = undo_ints_.back().second, undo_ints_.pop_back();
-  while (undo_paths_.size() > paths) op_path_[undo_paths_.back().first] = undo_paths_.back().second, undo_paths_.pop_back();
+void PibtStep::hold(int ai, const OpChoice& c) {
+  op_path_[ai] = c.path;
+  op_cost_[ai] = c.cost;
+  op_code_[ai] = c.code;
 }
 
-// The agents operation p of ai displaces (cells they hold at the same step, or moves crossing
-// ai's), into out[0..m). False when p meets a fixed cell or an agent planned already.
-bool PibtStep::conflicts_of(int ai, const OpPath& p, int* out, int& m) const {
-  m = 0;
-  auto add = [&](int v) {
-    if (locked_[v] == lock_stamp_) return false;  // planned already: it keeps its operation
-    if (std::find(out, out + m, v) == out + m) out[m++] = v;
-    return true;
+// The one agent whose reserved cells (or a move crossing one of p's) operation p of ai meets:
+// kFree for none, kBlocked for a fixed cell or more than one agent.
+int PibtStep::blocker(int ai, const OpPath& p) const {
+  int who = kFree;
+  auto meet = [&](int v) {
+    if (v == kFree || v == ai) return true;
+    if (v == kFixed) return false;
+    if (who == kFree) who = v;
+    return who == v;
   };
   for (int k = 1; k <= kOpSteps; ++k) {
     const Cell c = p.cell[k], before = p.cell[k - 1];
-    const int v = res(k, c);
-    if (v == kFixed) return false;
-    if (v >= 0 && v != ai && !add(v)) return false;
+    if (!meet(res(k, c))) return kBlocked;
     if (before == c) continue;
     const int u = k == 1 ? occupied_now_[c] : res(k - 1, c);  // who is at c before ai gets there
-    if (u >= 0 && u != ai && res(k, before) == u && !add(u)) return false;
+    if (u >= 0 && u != ai && res(k, before) == u && !meet(u)) return kBlocked;
   }
+  return who;
+}
+
+// The path and cost of operation `code` for ai from its pose; false when it leaves the map. The
+// cost is the step at which it reaches the goal, else kOpSteps + 1 + the distance with turns from
+// the state it ends in.
+bool PibtStep::op_choice(const WorldView& world, int ai, int code, OpChoice& out) const {
+  const Operation op = decode(code);
+  const DistRow& row = *rows_[ai];
+  Pose q = world.pose(ai);
+  out.path.cell[0] = q.cell, out.path.heading[0] = q.heading;
+  int reached = -1;
+  for (int k = 1; k <= kOpSteps; ++k) {
+    q = apply_action(grid_, q, op[k - 1]);
+    if (q.cell == kNoCell) return false;
+    out.path.cell[k] = q.cell, out.path.heading[k] = q.heading;
+    if (q.cell == goal_of_[ai] && reached < 0) reached = k;
+  }
+  out.cost = reached >= 0 ? reached : kOpSteps + 1 + std::min(row.at(q.cell, q.heading), 1 << 20);
+  out.code = static_cast<int8_t>(code);
   return true;
 }
 
-// ai's operations that stay on free cells, best first: one starting with the preferred cell's
-// action (a guidance path), then by the goal reached earliest or the distance with turns from
-// the final state, then (kFreeFirst) the fewest cells held by others, then the fewest leading
-// waits (without it, an agent asked to give way chose to wait first and was asked again at the
-// next step, for ever), then the earliest progress, then at random.
-int PibtStep::order_operations(const WorldView& world, int ai, OpPath* paths) {
+// ai's operations, best first: one starting with the preferred cell's action (a guidance path),
+// then the least cost, then the fewest leading waits (an agent asked to give way that puts it
+// off is asked again at the next step), then the earliest progress, then at random.
+void PibtStep::order_operations(const WorldView& world, int ai) {
   const Pose start = world.pose(ai);
   const DistRow& row = *rows_[ai];
   const Cell pref = preferred_ ? (*preferred_)[ai] : kNoCell;
   const Heading pref_h = pref == kNoCell ? kNoHeading : heading_of_move(grid_, start.cell, pref);
-  const bool free_first = opt_.tie_break != PibtOptions::TieBreak::kRandom;
+  OpChoice* cand = &op_cand_[size_t(ai) * kMaxOps];
   std::array<std::pair<long long, int>, kMaxOps> keyed;
+  OpChoice found[kMaxOps];
   int m = 0;
-  for (const Operation& op : operations()) {
-    OpPath& p = paths[m];
-    Pose q = start;
-    p.cell[0] = q.cell, p.heading[0] = q.heading;
-    int reached = -1, sum = 0, busy = 0;
-    bool ok = true;
-    for (int k = 1; k <= kOpSteps && ok; ++k) {
-      q = apply_action(grid_, q, op[k - 1]);
-      ok = q.cell != kNoCell;
-      if (!ok) break;
-      p.cell[k] = q.cell, p.heading[k] = q.heading;
-      const int d = std::min(row.at(q.cell, q.heading), 1 << 20);
-      if (q.cell == goal_of_[ai] && reached < 0) reached = k;
-      sum += d;
-      const int v = res(k, q.cell);
-      busy += v == kFixed || (v >= 0 && v != ai);
-    }
-    if (!ok) continue;
+  for (int code : operation_codes()) {
+    OpChoice& c = found[m];
+    if (!op_choice(world, ai, code, c)) continue;
+    const Operation op = decode(code);
     bool preferred = false;
     if (pref == start.cell) preferred = op[0] == Action::kWait;
     else if (pref_h != kNoHeading)
       preferred = op[0] == Action::kForward ? pref_h == start.heading
-                  : op[0] != Action::kWait && turn_steps(p.heading[1], pref_h) < turn_steps(start.heading, pref_h);
-    const long long cost = reached >= 0 ? reached : kOpSteps + 1 + std::min(row.at(q.cell, q.heading), 1 << 20);
-    int waits = 0;  // leading waits: an agent giving way that puts it off is asked again next step
+                  : op[0] != Action::kWait && turn_steps(c.path.heading[1], pref_h) < turn_steps(start.heading, pref_h);
+    int waits = 0, sum = 0;
     while (waits < kOpSteps && op[waits] == Action::kWait) ++waits;
-    keyed[m] = {((preferred ? 0LL : 1LL) << 50) + (cost << 26) + ((free_first ? busy : 0) << 23) +
-                    (static_cast<long long>(waits) << 21) + std::min(sum, (1 << 21) - 1),
+    for (int k = 1; k <= kOpSteps; ++k) sum += std::min(row.at(c.path.cell[k], c.path.heading[k]), 1 << 20);
+    keyed[m] = {((preferred ? 0LL : 1LL) << 50) + (static_cast<long long>(c.cost) << 26) +
+                    (static_cast<long long>(waits) << 22) + std::min(sum, (1 << 22) - 1),
                 m};
     ++m;
   }
   std::shuffle(keyed.begin(), keyed.begin() + m, rng_);
   std::stable_sort(keyed.begin(), keyed.begin() + m);
-  OpPath sorted[kMaxOps];
-  for (int k = 0; k < m; ++k) sorted[k] = paths[keyed[k].second];
-  std::copy(sorted, sorted + m, paths);
-  return m;
-}
-
-// Plans ai (displaced, or next in priority order): its best operation whose displaced agents can
-// all be planned around it. On failure everything it changed is left for the caller to undo.
-bool PibtStep::plan_operation(const WorldView& world, int ai, int depth) {
-  if (++op_plans_ > kOpBudget) return false;
-  undo_ints_.emplace_back(&locked_[ai], locked_[ai]);
-  locked_[ai] = lock_stamp_;
-  release(ai);
-  OpPath cand[kMaxOps];
-  const int m = order_operations(world, ai, cand);
-  int displaced[2 * kOpSteps];
-  for (int c = 0; c < m; ++c) {
-    int nd = 0;
-    if (!conflicts_of(ai, cand[c], displaced, nd) || (nd > 0 && depth >= kOpDepth)) continue;
-    const size_t ints = undo_ints_.size(), paths = undo_paths_.size();
-    for (int k = 0; k < nd; ++k) release(displaced[k]);
-    reserve(ai, cand[c]);
-    bool ok = true;
-    for (int k = 0; k < nd && ok; ++k) ok = plan_operation(world, displaced[k], depth + 1);
-    if (ok) return true;
-    rollback(ints, paths);
-    if (op_plans_ > kOpBudget) break;
+  for (int k = 0; k < m; ++k) {  // the cost orders the operations as the list does, for the score
+    cand[k] = found[keyed[k].second];
+    cand[k].cost = cand[k].cost * kMaxOps + k;
   }
-  return false;
+  op_cand_n_[ai] = m;
 }
 
-// The step in the rotation model: every agent of the call holds its cell, agents outside it and
-// blocked cells are fixed, then the main loop plans agents in priority order; each agent's first
-// action is its move.
+// ai's operation `code` in its list (order_operations); waiting when it is not there.
+const PibtStep::OpChoice& PibtStep::listed(int ai, int code) const {
+  const OpChoice* cand = &op_cand_[size_t(ai) * kMaxOps];
+  const OpChoice* wait = nullptr;
+  for (int k = 0; k < op_cand_n_[ai]; ++k) {
+    if (cand[k].code == code) return cand[k];
+    if (cand[k].code == kWww) wait = &cand[k];
+  }
+  return *wait;
+}
+
+bool PibtStep::past_deadline(long& counter) const {
+  return deadline_ != std::chrono::steady_clock::time_point::max() && (counter++ & 3) == 0 &&
+         std::chrono::steady_clock::now() >= deadline_;
+}
+
+// EPIBT's build: ai (its path released by the caller) takes its best operation that is free, or
+// that displaces one agent which can in turn be built around it (recursively). In the first pass
+// only agents of lower priority than the root (`root`, its op_key_) may be displaced; in the
+// search anyone may, and the result stands only if the fleet's score did not fall. Every
+// agent holds a valid operation throughout: a failed attempt restores what it changed.
+PibtStep::OpResult PibtStep::build(const WorldView& world, int ai, bool search, double root, int depth,
+                                   long& counter) {
+  if (past_deadline(counter)) return OpResult::kRejected;
+  if (op_visit_[ai] != op_round_) op_visit_[ai] = op_round_, op_visits_[ai] = 0;
+  ++op_visits_[ai];
+  op_on_stack_[ai] = 1;
+  const OpChoice old{op_path_[ai], op_cost_[ai], op_code_[ai]};
+  const OpChoice* cand = &op_cand_[size_t(ai) * kMaxOps];
+  for (int c = 0; c < op_cand_n_[ai]; ++c) {
+    const int u = blocker(ai, cand[c].path);
+    if (u == kBlocked) continue;
+    if (u == kFree) {
+      hold(ai, cand[c]);
+      reserve(ai);
+      if (search && op_score_ < op_score_before_ - 1e-9) {
+        release(ai);
+        hold(ai, old);
+        op_on_stack_[ai] = 0;
+        return OpResult::kRejected;
+      }
+      op_on_stack_[ai] = 0;
+      return OpResult::kAccepted;
+    }
+    if (depth >= kOpDepth || op_on_stack_[u] || world.is_immovable(u) || (op_visit_[u] == op_round_ && op_visits_[u] >= kOpVisits) ||
+        op_key_[u] >= root)
+      continue;
+    release(u);
+    hold(ai, cand[c]);
+    reserve(ai);
+    ++counter;
+    const OpResult r = build(world, u, search, root, depth + 1, counter);
+    if (r == OpResult::kAccepted) {
+      op_on_stack_[ai] = 0;
+      return r;
+    }
+    release(ai);
+    reserve(u);  // u's failed build left it holding its own operation
+    hold(ai, old);
+    if (r == OpResult::kRejected) {
+      op_on_stack_[ai] = 0;
+      return r;
+    }
+  }
+  op_on_stack_[ai] = 0;
+  return OpResult::kFailed;
+}
+
+void PibtStep::rebuild(const WorldView& world, int ai, bool search) {
+  long counter = 0;
+  op_score_before_ = op_score_;
+  release(ai);
+  if (build(world, ai, search, op_key_[ai], 0, counter) != OpResult::kAccepted) reserve(ai);
+}
+
+// Agent ai's operation at the start of the call: the one it chose at the last step, carried on,
+// when it made that operation's first action; else wait, wait, wait.
+void PibtStep::start_operation(const WorldView& world, int ai) {
+  const Pose p = world.pose(ai);
+  const bool carried = op_carried_t_[ai] == world.timestep && op_carried_at_[ai] == p.cell &&
+                       op_carried_heading_[ai] == p.heading && !world.is_immovable(ai);
+  hold(ai, listed(ai, carried ? op_carried_[ai] : kWww));
+}
+
+// Agent ai and, recursively, every agent whose reserved cells meet its own, fall back to waiting.
+void PibtStep::wait_in_place(const WorldView& world, int ai) {
+  const OpChoice& c = listed(ai, kWww);
+  hold(ai, c);
+  for (int k = 1; k <= kOpSteps; ++k) {
+    const int v = res(k, c.path.cell[k]);
+    if (v >= 0 && v != ai) {
+      release(v);
+      wait_in_place(world, v);
+    }
+  }
+  reserve(ai);
+}
+
+// The step in the rotation model (EPIBT): every agent of the call starts holding the operation it
+// carried on from the last step (or waits), the agents are built in priority order, and with a
+// deadline the rest of the time goes to rebuilding agents in random order, keeping each change
+// that does not lower the fleet's score (the sum over agents of the cost they gain over waiting,
+// weighted by their priority's rank). Each agent's first action is its move.
 void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
                                const std::vector<std::pair<Cell, Cell>>& fixed_moves) {
   const int n = world.num_agents();
   res_.resize(size_t(kOpSteps) * grid_.num_cells(), kFree);
-  op_path_.resize(n);
-  locked_.resize(n, 0);
-  if (++lock_stamp_ == INT_MAX) std::fill(locked_.begin(), locked_.end(), 0), lock_stamp_ = 1;
+  if (static_cast<int>(op_path_.size()) < n) {
+    op_path_.resize(n), op_cost_.resize(n), op_code_.resize(n), op_wait_cost_.resize(n), op_power_.resize(n);
+    op_key_.resize(n), op_cand_.resize(size_t(n) * kMaxOps), op_cand_n_.resize(n);
+    op_visit_.resize(n, 0), op_visits_.resize(n, 0), op_on_stack_.resize(n, 0);
+    op_carried_.resize(n, kWww), op_carried_at_.resize(n, kNoCell), op_carried_heading_.resize(n, kNoHeading);
+    op_carried_t_.resize(n, INT_MIN);
+  }
   auto fix = [&](Cell c, int from_k) {
     for (int k = from_k; c != kNoCell && k <= kOpSteps; ++k) res(k, c) = kFixed;
   };
@@ -181,30 +274,55 @@ void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
   }
   if (world.blocked)
     for (Cell c : *world.blocked) fix(c, 1);
+  // Priority: EPIBT's, the nearest to its goal first (ties by PIBT's priority); the weight of an
+  // agent in the score falls with its rank.
   for (int i : order_) {
-    const Pose p = world.pose(i);
-    for (int k = 0; k <= kOpSteps; ++k) op_path_[i].cell[k] = p.cell, op_path_[i].heading[k] = p.heading;
-    for (int k = 1; k <= kOpSteps; ++k) res(k, p.cell) = i;
-    if (world.is_immovable(i)) locked_[i] = lock_stamp_;
+    order_operations(world, i);
+    op_wait_cost_[i] = listed(i, kWww).cost;
+    const bool idle = goal_of_[i] == world.positions[i];  // no goal, or waiting (dead_end_wait)
+    op_key_[i] = (idle ? -1e9 : -static_cast<double>(op_wait_cost_[i] / kMaxOps)) + 1e-6 * priority_[i];
   }
-  std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) { return priority_[a] > priority_[b]; });
-  const bool timed = deadline_ != std::chrono::steady_clock::time_point::max();
+  std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) { return op_key_[a] > op_key_[b]; });
+  const double m = static_cast<double>(order_.size()) + 1;
+  for (size_t r = 0; r < order_.size(); ++r) {
+    const double power = (m - static_cast<double>(r)) / m;
+    op_power_[order_[r]] = power * power;
+  }
+  op_score_ = 0;
   for (int i : order_) {
-    if (locked_[i] == lock_stamp_) continue;
-    if (timed && std::chrono::steady_clock::now() >= deadline_) {  // the rest hold their cells (WWW)
+    start_operation(world, i);
+    if (blocker(i, op_path_[i]) != kFree) wait_in_place(world, i);
+    else reserve(i);
+  }
+  ++op_round_;
+  for (int i : order_) {
+    if (std::chrono::steady_clock::now() >= deadline_) {  // the rest keep the operation they hold
       ++deadline_stops_;
       break;
     }
-    op_plans_ = 0;
-    if (!plan_operation(world, i, 0)) rollback(0, 0);
-    locked_[i] = lock_stamp_;
-    undo_ints_.clear();
-    undo_paths_.clear();
+    if (op_visit_[i] != op_round_ && !world.is_immovable(i)) rebuild(world, i, false);
+  }
+  if (deadline_ != std::chrono::steady_clock::time_point::max()) {
+    std::vector<int> shuffled(order_);
+    for (double before = -1; op_score_ > before + 1e-9 && std::chrono::steady_clock::now() < deadline_;) {
+      before = op_score_;
+      std::shuffle(shuffled.begin(), shuffled.end(), rng_);
+      ++op_round_;
+      ++op_search_rounds_;
+      for (int i : shuffled) {
+        if (std::chrono::steady_clock::now() >= deadline_) break;
+        if (op_visit_[i] != op_round_ && !world.is_immovable(i)) rebuild(world, i, true);
+      }
+    }
   }
   for (int i : order_) {
-    next[i] = op_path_[i].cell[1];
-    (*world.next_headings)[i] = op_path_[i].heading[1];
-    for (int k = 1; k <= kOpSteps; ++k) res(k, op_path_[i].cell[k]) = kFree;
+    const OpPath& p = op_path_[i];
+    next[i] = p.cell[1];
+    (*world.next_headings)[i] = p.heading[1];
+    op_carried_[i] = carried_code(op_code_[i]);
+    op_carried_at_[i] = p.cell[1], op_carried_heading_[i] = p.heading[1];
+    op_carried_t_[i] = world.timestep + 1;
+    for (int k = 1; k <= kOpSteps; ++k) res(k, p.cell[k]) = kFree;
   }
   for (auto& [from, to] : fixed_moves)
     for (Cell c : {from, to})

@@ -17,18 +17,20 @@
 // Rotation model (issue 23, LoRR's MAPF_T; action_model.hpp): PIBT over (cell, heading) states,
 // with short operations. Only forward (F) leaves a cell, so an agent that must turn before it can
 // move keeps its cell for a step or two, and giving way takes several steps: turn, [turn,] forward.
-// After EPIBT (Nagorny et al., LoRR 2024 winner, arXiv 2511.09193), each agent therefore chooses an
+// After EPIBT (Nagorny et al., LoRR 2024 winner, arXiv 2511.09193), each agent therefore holds an
 // operation, a sequence of kOpSteps actions (F, R, C, W; no turn undoing the last one, no turn at
-// the end), ordered by the distance with turns (DistRow::at) from the state it ends in, and the
-// cells it holds at t+1 .. t+kOpSteps are reserved. Priority inheritance runs over operations: an
-// operation that meets the reserved cells (or crossing moves) of lower agents not yet planned
-// displaces them, and each must find an operation of its own around the higher ones (recursively);
-// if one cannot, everything the attempt changed is undone and the next operation is tried. Every
-// agent starts the step holding its cell (WWW), so an agent nobody displaces simply waits. Only
-// the first action is executed; the step after plans again. Recursion depth and attempts per agent
-// are bounded (kOpDepth, kOpBudget): a bounded attempt fails like a blocked one. PibtOptions::rotation
-// picks these operations or (the default) cells chosen with turns counted and executed turning
-// first. Swap emulation is off in this model (either way, it held agents back; docs/results.md).
+// the end), and the cells it holds at t+1 .. t+kOpSteps are reserved. An agent's operations are
+// ordered by the distance with turns (DistRow::at) from the state they end in. Every agent starts
+// the step holding what is left of its last step's operation (then a wait), so plans carry on; an
+// agent whose carried operation no longer fits waits. Then, nearest its goal first, each agent is
+// built: it takes its best operation that is free, or that meets the cells of one agent of lower
+// priority, which is then built around it in turn (recursively); a chain that fails is undone and
+// the next operation tried. With a deadline the rest of the time rebuilds agents in random order
+// (the same rule), keeping each change that does not lower the fleet's score (each agent's gain
+// over waiting, weighted by its rank: EPIBT's LNS), until a round gains nothing. Only the first
+// action is executed. PibtOptions::rotation picks these operations or cells chosen with turns
+// counted and executed turning first. Swap emulation is off in this model (either way, it held
+// agents back; docs/results.md).
 #pragma once
 
 #include <chrono>
@@ -128,8 +130,8 @@ class PibtStep {
   const PibtOptions& options() const { return opt_; }
   long swaps() const { return swaps_; }
   // The next step() stops planning agents at `deadline`. Over operations the check comes before
-  // each agent, and those not planned by then keep their cells (wait), which is always valid: an
-  // agent only ever moves into a cell whose agent was planned first. Over cells it comes before
+  // each agent (and every few builds of a chain), and those not built by then keep the operation
+  // they hold, which is always valid; the search runs until the deadline. Over cells it comes before
   // each kDeadlineStride agents of the priority order, after the first kDeadlineStride (PIBT over
   // 10,000 agents with turns takes about 10 ms here), and the agents not planned by then step
   // ahead: into the cell they face (mapf: their nearest neighbour) when it is empty, unclaimed and
@@ -149,30 +151,53 @@ class PibtStep {
   void step_ahead(const WorldView& world, int ai, std::vector<Cell>& next);
 
   // Rotation model: operations (see above; pibt_operations.cpp).
-  static constexpr int kOpDepth = 30;    // displaced agents planned recursively, at most this deep
-  static constexpr int kOpBudget = 1000;  // operation plans per agent of the main loop
+  static constexpr int kMaxOps = 64;
+  static constexpr int kOpVisits = 10;   // builds of one agent per round, at most (EPIBT's bound)
+  static constexpr int kOpDepth = 1000;  // displaced agents built recursively, at most this deep
   struct OpPath {
     Cell cell[kOpSteps + 1];
     Heading heading[kOpSteps + 1];
   };
+  struct OpChoice {
+    OpPath path;
+    int cost = 0;
+    int8_t code = 0;
+  };
+  enum class OpResult { kAccepted, kFailed, kRejected };
   void plan_operations(const WorldView& world, std::vector<Cell>& next,
                        const std::vector<std::pair<Cell, Cell>>& fixed_moves);
-  bool plan_operation(const WorldView& world, int ai, int depth);
-  int order_operations(const WorldView& world, int ai, OpPath* paths);
-  bool conflicts_of(int ai, const OpPath& p, int* out, int& m) const;
-  void reserve(int ai, const OpPath& p);
+  bool op_choice(const WorldView& world, int ai, int code, OpChoice& out) const;
+  void order_operations(const WorldView& world, int ai);
+  const OpChoice& listed(int ai, int code) const;
+  void start_operation(const WorldView& world, int ai);
+  void wait_in_place(const WorldView& world, int ai);
+  OpResult build(const WorldView& world, int ai, bool search, double root, int depth, long& counter);
+  void rebuild(const WorldView& world, int ai, bool search);
+  bool past_deadline(long& counter) const;
+  int blocker(int ai, const OpPath& p) const;
+  void hold(int ai, const OpChoice& c);
+  void reserve(int ai);
   void release(int ai);
-  void set_res(int k, Cell c, int v);
-  void rollback(size_t ints, size_t paths);
   int& res(int k, Cell c) { return res_[size_t(k - 1) * grid_.num_cells() + c]; }
   int res(int k, Cell c) const { return res_[size_t(k - 1) * grid_.num_cells() + c]; }
   std::vector<int> res_;          // kOpSteps x cells: who holds cell c at t+k; -1 free, kFixed
-  std::vector<OpPath> op_path_;   // per agent: the operation it holds
-  std::vector<int> locked_;       // per agent: == lock_stamp_ once planned this call
-  int lock_stamp_ = 0;
-  std::vector<std::pair<int*, int>> undo_ints_;   // (where, old value), for rollback
-  std::vector<std::pair<int, OpPath>> undo_paths_;  // (agent, old operation)
-  long op_plans_ = 0;
+  std::vector<OpPath> op_path_;   // per agent: the operation it holds, its path ...
+  std::vector<int> op_cost_;      // ... its cost
+  std::vector<int8_t> op_code_;   // ... and its code
+  std::vector<int> op_wait_cost_;  // per agent: the cost of waiting
+  std::vector<double> op_power_;   // per agent: its weight in the score
+  std::vector<double> op_key_;     // per agent: its priority this call (larger first)
+  std::vector<OpChoice> op_cand_;  // per agent, kMaxOps slots: its operations, best first
+  std::vector<int> op_cand_n_;
+  std::vector<int> op_visit_, op_visits_;  // per agent: the round of its last build, builds in it
+  std::vector<uint8_t> op_on_stack_;
+  int op_round_ = 0;
+  double op_score_ = 0, op_score_before_ = 0;
+  std::vector<int8_t> op_carried_;     // per agent: the operation carried on to the next step,
+  std::vector<Cell> op_carried_at_;    // ... from this cell
+  std::vector<Heading> op_carried_heading_;  // ... and heading
+  std::vector<int> op_carried_t_;      // ... at this timestep
+  long op_search_rounds_ = 0;
   std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
   long deadline_stops_ = 0;
   void order_candidates(const WorldView& world, int ai, bool pushed, Cell* cand, int m);
