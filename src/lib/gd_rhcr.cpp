@@ -635,6 +635,7 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"secondary_deadline_stops", pibt_.deadline_stops()},
           {"secondary_starts", pibt_.starts()},
           {"secondary_starts_won", pibt_.starts_won()},
+          {"secondary_search_rounds", pibt_.search_rounds()},
           {"guidance_cut_short", guidance_ ? guidance_->cut_short() : 0},
           {"guidance_searches", guidance_ ? guidance_->searches() : 0},
           {"guidance_kept", guidance_ ? guidance_->kept() : 0},

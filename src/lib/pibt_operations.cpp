@@ -274,8 +274,9 @@ void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
   }
   if (world.blocked)
     for (Cell c : *world.blocked) fix(c, 1);
-  // Priority: EPIBT's, the nearest to its goal first (ties by PIBT's priority); the weight of an
-  // agent in the score falls with its rank.
+  // Priority: EPIBT's, the nearest to its goal first (ties by PIBT's priority), and agents whose
+  // goal is their own cell (none, or waiting: dead_end_wait) last, so others may displace them;
+  // the weight of an agent in the score falls with its rank.
   for (int i : order_) {
     order_operations(world, i);
     op_wait_cost_[i] = listed(i, kWww).cost;

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <functional>
 
+#include "gdrhcr/pibt.hpp"
 #include "gdrhcr/planner.hpp"
 #include "gdrhcr/simulator.hpp"
 #include "gdrhcr/task_stream.hpp"
@@ -206,6 +207,60 @@ TEST(RotationPlanners, OperationsStopAtTheStepBudgetAndTheOthersWait) {
       EXPECT_EQ(moved, 0);
     }
   }
+}
+
+TEST(RotationPlanners, AnOperationIsCarriedOnWhenTheNextStepHasNoTime) {
+  // A lone agent faces west with its goal 3 cells east: PIBT over operations plans turn, turn,
+  // forward (clockwise twice: two counter-clockwise turns are not an operation). The next two calls begin past their deadline and build nobody: the agent carries on
+  // the rest of its operation (turn, then forward) instead of waiting.
+  const Grid g = Grid::from_rows({"........"});
+  DistTable dist(g, ActionModel::kRotation);
+  PibtOptions o;
+  o.rotation = PibtOptions::Rotation::kOperations;
+  PibtStep pibt(g, 1, 5, o);
+  std::vector<Cell> pos{g.cell(3, 0)};
+  std::vector<Heading> heads{kWest};
+  const std::vector<std::vector<Cell>> goals{{g.cell(6, 0)}};
+  StepValidator validator(g, ActionModel::kRotation);
+  const std::vector<Pose> expect{{g.cell(3, 0), kNorth}, {g.cell(3, 0), kEast}, {g.cell(4, 0), kEast}};
+  for (int t = 0; t < 3; ++t) {
+    WorldView w{g, dist, t, pos, goals};
+    w.action_model = ActionModel::kRotation;
+    std::vector<Heading> next_heads(1, kNoHeading);
+    w.headings = &heads;
+    w.next_headings = &next_heads;
+    std::vector<Cell> next(1, kNoCell);
+    if (t > 0) pibt.set_deadline(std::chrono::steady_clock::now() - std::chrono::seconds(1));
+    pibt.step(w, next);
+    EXPECT_FALSE(validator.check(pos, next, &heads, &next_heads));
+    EXPECT_EQ(next[0], expect[t].cell) << "step " << t;
+    EXPECT_EQ(next_heads[0], expect[t].heading) << "step " << t;
+    pos = next, heads = next_heads;
+  }
+  EXPECT_EQ(pibt.deadline_stops(), 2);
+  EXPECT_EQ(pos[0], g.cell(4, 0));
+}
+
+TEST(RotationPlanners, OperationsSearchTheRestOfTheBudgetAndStayValid) {
+  // A crowded fleet (90% of random-32-32-20's free cells) under GD-RHCR with PIBT over
+  // operations and a budget: after the first pass the search (EPIBT's LNS) runs, every step stays
+  // valid, and the fleet reaches goals.
+  const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
+  DistTable dist(g, ActionModel::kRotation);
+  const int n = 740;
+  const auto starts = random_starts(g, n, 4);
+  SimOptions opt;
+  opt.steps = 30;
+  opt.action_model = ActionModel::kRotation;
+  Params p;
+  p.set("rotation-pibt", "operations");
+  p.set("step-budget", "0.005");
+  auto planner = make_planner("gd-rhcr", p, g, n, 4, ActionModel::kRotation);
+  RandomNavigationStream tasks(g, 4);
+  const SimResult r = run_simulation(g, dist, tasks, *planner, starts, opt);
+  EXPECT_EQ(r.collisions, 0);
+  EXPECT_GT(r.goals_reached, 0);
+  EXPECT_GT(planner->stats()["secondary_search_rounds"].get<long>(), 0);
 }
 
 TEST(RotationPlanners, CellsStopAtTheStepBudgetAndTheOthersStepAheadOrWait) {

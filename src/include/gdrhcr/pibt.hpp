@@ -22,8 +22,8 @@
 // the end), and the cells it holds at t+1 .. t+kOpSteps are reserved. An agent's operations are
 // ordered by the distance with turns (DistRow::at) from the state they end in. Every agent starts
 // the step holding what is left of its last step's operation (then a wait), so plans carry on; an
-// agent whose carried operation no longer fits waits. Then, nearest its goal first, each agent is
-// built: it takes its best operation that is free, or that meets the cells of one agent of lower
+// agent whose carried operation no longer fits waits. Then, nearest its goal first (agents with
+// nothing to reach last), each agent is built: it takes its best operation that is free, or that meets the cells of one agent of lower
 // priority, which is then built around it in turn (recursively); a chain that fails is undone and
 // the next operation tried. With a deadline the rest of the time rebuilds agents in random order
 // (the same rule), keeping each change that does not lower the fleet's score (each agent's gain
@@ -141,6 +141,7 @@ class PibtStep {
   long deadline_stops() const { return deadline_stops_; }  // steps stopped so
   long starts() const { return starts_; }            // rotation_starts: PIBT runs made
   long starts_won() const { return starts_won_; }    // ... configurations a shaken run gave
+  long search_rounds() const { return op_search_rounds_; }  // operations: rounds of the search
   static constexpr int kStartBox = 4;
   static constexpr double kStartNoise = 5.0;
   static constexpr int kOpSteps = 3;  // actions per operation in the rotation model
