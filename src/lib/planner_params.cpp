@@ -192,8 +192,9 @@ std::vector<ParamSpec> pibt_rows() {
           choice("tie-break", {"free-first", "random"}, "free-first",
                  "order among equally near cells: an unoccupied one first, or random"),
           choice("rotation-pibt", {"operations", "cells"}, "cells",
-                 "rotation model: PIBT over 3-action operations, or over cells chosen with turns counted and "
-                 "executed turning first", "operations"),
+                 "rotation model: PIBT over 3-action operations carried on between steps (EPIBT; with a step "
+                 "budget its LNS spends the rest), or over cells chosen with turns counted and executed turning first",
+                 "operations"),
           real("traffic-cost", 0, 8, "0",
                "rotation model: extra cost of a forward move into the map's busiest cells (by sampled shortest-path "
                "flow), so distances lead around them (0 = none)"),
