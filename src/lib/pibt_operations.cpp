@@ -17,7 +17,8 @@ constexpr int kBlocked = -2;  // blocker(): a fixed cell, or more than one agent
 
 using Operation = std::array<Action, PibtStep::kOpSteps>;
 constexpr Action kAll[4] = {Action::kForward, Action::kClockwise, Action::kCounterClockwise, Action::kWait};
-constexpr int kWww = 63;  // the code of wait, wait, wait (code: action k is kAll[code / 4^k % 4])
+constexpr int kCodes = 1 << (2 * PibtStep::kOpSteps);  // 4^kOpSteps sequences of actions
+constexpr int kWww = kCodes - 1;  // the code of waiting throughout (code: action k is kAll[code / 4^k % 4])
 
 bool is_turn(Action a) { return a == Action::kClockwise || a == Action::kCounterClockwise; }
 
@@ -43,7 +44,7 @@ bool kept_operation(const Operation& op) {
 const std::vector<int>& operation_codes() {
   static const std::vector<int> codes = [] {
     std::vector<int> c;
-    for (int code = 0; code < 64; ++code)
+    for (int code = 0; code < kCodes; ++code)
       if (kept_operation(decode(code))) c.push_back(code);
     return c;
   }();
@@ -51,7 +52,7 @@ const std::vector<int>& operation_codes() {
 }
 
 // The operation left of `code` after its first action: the rest, then a wait.
-int carried_code(int code) { return code / 4 + 3 * 16; }
+int carried_code(int code) { return code / 4 + 3 * (kCodes / 4); }
 }  // namespace
 
 void PibtStep::reserve(int ai) {
@@ -109,7 +110,7 @@ bool PibtStep::op_choice(const WorldView& world, int ai, int code, OpChoice& out
     if (q.cell == goal_of_[ai] && reached < 0) reached = k;
   }
   out.cost = reached >= 0 ? reached : kOpSteps + 1 + std::min(row.at(q.cell, q.heading), 1 << 20);
-  out.code = static_cast<int8_t>(code);
+  out.code = static_cast<int16_t>(code);
   return true;
 }
 
@@ -160,6 +161,29 @@ const PibtStep::OpChoice& PibtStep::listed(int ai, int code) const {
     if (cand[k].code == kWww) wait = &cand[k];
   }
   return *wait;
+}
+
+// The swap over operations (rotation_swap_wait; LaCAM*'s swap, as over cells): an agent that has
+// stood long, whose best operation enters the cell of an agent that must get past it
+// (swap_partner), retreats. Its operations that leave its cell without entering that one come
+// first, the earliest to leave first; the other agent, built later, follows through the cell it
+// leaves. It goes on while the other still needs it.
+void PibtStep::retreat_operations(const WorldView& world, int ai) {
+  if (!swap_allowed(world, ai) || world.is_immovable(ai)) return;
+  OpChoice* cand = &op_cand_[size_t(ai) * kMaxOps];
+  const Cell here = world.positions[ai];
+  Cell best = here;
+  for (int k = 1; k <= kOpSteps && best == here; ++k) best = cand[0].path.cell[k];
+  const int partner = swap_partner(world, ai, best);
+  swapping_[ai] = partner >= 0;
+  if (partner < 0) return;
+  auto leaves = [&](const OpChoice& c) {  // the step c leaves `here` for another cell than `best`
+    for (int k = 1; k <= kOpSteps; ++k)
+      if (c.path.cell[k] != here) return c.path.cell[k] == best ? kOpSteps + 1 : k;
+    return kOpSteps + 1;
+  };
+  std::stable_sort(cand, cand + op_cand_n_[ai], [&](const OpChoice& a, const OpChoice& b) { return leaves(a) < leaves(b); });
+  ++swaps_;
 }
 
 bool PibtStep::past_deadline(long& counter) const {
@@ -279,6 +303,7 @@ void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
   // the weight of an agent in the score falls with its rank.
   for (int i : order_) {
     order_operations(world, i);
+    retreat_operations(world, i);
     op_wait_cost_[i] = listed(i, kWww).cost;
     const bool idle = goal_of_[i] == world.positions[i];  // no goal, or waiting (dead_end_wait)
     op_key_[i] = (idle ? -1e9 : -static_cast<double>(op_wait_cost_[i] / kMaxOps)) + 1e-6 * priority_[i];

@@ -29,8 +29,9 @@
 // (the same rule), keeping each change that does not lower the fleet's score (each agent's gain
 // over waiting, weighted by its rank: EPIBT's LNS), until a round gains nothing. Only the first
 // action is executed. PibtOptions::rotation picks these operations or cells chosen with turns
-// counted and executed turning first. Swap emulation is off in this model (either way, it held
-// agents back; docs/results.md).
+// counted and executed turning first. The swap applies in this model only to an agent that has
+// stood long (rotation_swap_wait): over operations it retreats, its operations that leave its
+// cell by another way first, and the agent that must get past it follows.
 #pragma once
 
 #include <chrono>
@@ -60,10 +61,11 @@ struct PibtOptions {
   // so its time is linear in the agents, as in the mapf model.
   enum class Rotation { kOperations, kCells };
   Rotation rotation = Rotation::kOperations;
-  // Rotation model, kCells: the swap starts only for an agent that has stood in its cell this many
-  // steps (0: never), and goes on while its partner still needs it. Used at every step it holds
-  // agents back (a retreat costs turns); without it an agent heading into a dead end whose
-  // occupant can leave only through its cell waits for ever, and the agents queued behind it.
+  // Rotation model: the swap starts only for an agent that has stood in its cell this many steps
+  // (0: never), and goes on while its partner still needs it (over operations: it retreats). Used
+  // at every step it holds agents back (a retreat costs turns); without it an agent heading into a
+  // dead end whose occupant can leave only through its cell waits for ever, and the agents queued
+  // behind it.
   int rotation_swap_wait = 0;
   // Rotation model, kCells, a call that moves the whole fleet: the configuration PIBT chose is
   // carried out to the end before PIBT plans again. Agents that face their cell move, the others
@@ -152,7 +154,7 @@ class PibtStep {
   void step_ahead(const WorldView& world, int ai, std::vector<Cell>& next);
 
   // Rotation model: operations (see above; pibt_operations.cpp).
-  static constexpr int kMaxOps = 64;
+  static constexpr int kMaxOps = 1 << (2 * kOpSteps);
   static constexpr int kOpVisits = 10;   // builds of one agent per round, at most (EPIBT's bound)
   static constexpr int kOpDepth = 1000;  // displaced agents built recursively, at most this deep
   struct OpPath {
@@ -162,13 +164,14 @@ class PibtStep {
   struct OpChoice {
     OpPath path;
     int cost = 0;
-    int8_t code = 0;
+    int16_t code = 0;
   };
   enum class OpResult { kAccepted, kFailed, kRejected };
   void plan_operations(const WorldView& world, std::vector<Cell>& next,
                        const std::vector<std::pair<Cell, Cell>>& fixed_moves);
   bool op_choice(const WorldView& world, int ai, int code, OpChoice& out) const;
   void order_operations(const WorldView& world, int ai);
+  void retreat_operations(const WorldView& world, int ai);
   const OpChoice& listed(int ai, int code) const;
   void start_operation(const WorldView& world, int ai);
   void wait_in_place(const WorldView& world, int ai);
@@ -184,7 +187,7 @@ class PibtStep {
   std::vector<int> res_;          // kOpSteps x cells: who holds cell c at t+k; -1 free, kFixed
   std::vector<OpPath> op_path_;   // per agent: the operation it holds, its path ...
   std::vector<int> op_cost_;      // ... its cost
-  std::vector<int8_t> op_code_;   // ... and its code
+  std::vector<int16_t> op_code_;  // ... and its code
   std::vector<int> op_wait_cost_;  // per agent: the cost of waiting
   std::vector<double> op_power_;   // per agent: its weight in the score
   std::vector<double> op_key_;     // per agent: its priority this call (larger first)
@@ -194,7 +197,7 @@ class PibtStep {
   std::vector<uint8_t> op_on_stack_;
   int op_round_ = 0;
   double op_score_ = 0, op_score_before_ = 0;
-  std::vector<int8_t> op_carried_;     // per agent: the operation carried on to the next step,
+  std::vector<int16_t> op_carried_;    // per agent: the operation carried on to the next step,
   std::vector<Cell> op_carried_at_;    // ... from this cell
   std::vector<Heading> op_carried_heading_;  // ... and heading
   std::vector<int> op_carried_t_;      // ... at this timestep
