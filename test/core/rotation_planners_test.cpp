@@ -209,10 +209,30 @@ TEST(RotationPlanners, OperationsStopAtTheStepBudgetAndTheOthersWait) {
   }
 }
 
+namespace {
+// One step of `pibt` in the rotation model, validated; moves pos and heads on. False if invalid.
+bool pibt_rotation_step(PibtStep& pibt, const Grid& g, const DistTable& dist, StepValidator& validator, int t,
+                        const std::vector<std::vector<Cell>>& goals, std::vector<Cell>& pos,
+                        std::vector<Heading>& heads) {
+  WorldView w{g, dist, t, pos, goals};
+  w.action_model = ActionModel::kRotation;
+  std::vector<Heading> next_heads(pos.size(), kNoHeading);
+  w.headings = &heads;
+  w.next_headings = &next_heads;
+  std::vector<Cell> next(pos.size(), kNoCell);
+  pibt.step(w, next);
+  const auto bad = validator.check(pos, next, &heads, &next_heads);
+  EXPECT_FALSE(bad) << bad->describe(g, t);
+  pos = next, heads = next_heads;
+  return !bad;
+}
+}  // namespace
+
 TEST(RotationPlanners, AnOperationIsCarriedOnWhenTheNextStepHasNoTime) {
   // A lone agent faces west with its goal 3 cells east: PIBT over operations plans turn, turn,
-  // forward (clockwise twice: two counter-clockwise turns are not an operation). The next two calls begin past their deadline and build nobody: the agent carries on
-  // the rest of its operation (turn, then forward) instead of waiting.
+  // forward (clockwise twice: two counter-clockwise turns are not an operation). The next two
+  // calls begin past their deadline and build nobody: the agent carries on the rest of its
+  // operation (turn, then forward) instead of waiting.
   const Grid g = Grid::from_rows({"........"});
   DistTable dist(g, ActionModel::kRotation);
   PibtOptions o;
@@ -224,18 +244,10 @@ TEST(RotationPlanners, AnOperationIsCarriedOnWhenTheNextStepHasNoTime) {
   StepValidator validator(g, ActionModel::kRotation);
   const std::vector<Pose> expect{{g.cell(3, 0), kNorth}, {g.cell(3, 0), kEast}, {g.cell(4, 0), kEast}};
   for (int t = 0; t < 3; ++t) {
-    WorldView w{g, dist, t, pos, goals};
-    w.action_model = ActionModel::kRotation;
-    std::vector<Heading> next_heads(1, kNoHeading);
-    w.headings = &heads;
-    w.next_headings = &next_heads;
-    std::vector<Cell> next(1, kNoCell);
     if (t > 0) pibt.set_deadline(std::chrono::steady_clock::now() - std::chrono::seconds(1));
-    pibt.step(w, next);
-    EXPECT_FALSE(validator.check(pos, next, &heads, &next_heads));
-    EXPECT_EQ(next[0], expect[t].cell) << "step " << t;
-    EXPECT_EQ(next_heads[0], expect[t].heading) << "step " << t;
-    pos = next, heads = next_heads;
+    ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t, goals, pos, heads));
+    EXPECT_EQ(pos[0], expect[t].cell) << "step " << t;
+    EXPECT_EQ(heads[0], expect[t].heading) << "step " << t;
   }
   EXPECT_EQ(pibt.deadline_stops(), 2);
   EXPECT_EQ(pos[0], g.cell(4, 0));
@@ -261,15 +273,7 @@ TEST(RotationPlanners, OperationsSwapOutOfADeadEnd) {
     StepValidator validator(g, ActionModel::kRotation);
     bool a_reached = false, b_reached = false;
     for (int t = 0; t < 30; ++t) {
-      WorldView w{g, dist, t, pos, goals};
-      w.action_model = ActionModel::kRotation;
-      std::vector<Heading> next_heads(2, kNoHeading);
-      w.headings = &heads;
-      w.next_headings = &next_heads;
-      std::vector<Cell> next(2, kNoCell);
-      pibt.step(w, next);
-      ASSERT_FALSE(validator.check(pos, next, &heads, &next_heads)) << "step " << t;
-      pos = next, heads = next_heads;
+      ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t, goals, pos, heads));
       a_reached = a_reached || pos[0] == dead_end;
       b_reached = b_reached || pos[1] == west;
     }
