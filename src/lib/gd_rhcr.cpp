@@ -636,6 +636,7 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"secondary_starts", pibt_.starts()},
           {"secondary_starts_won", pibt_.starts_won()},
           {"secondary_search_rounds", pibt_.search_rounds()},
+          {"secondary_stalls", pibt_.stalls()},
           {"guidance_cut_short", guidance_ ? guidance_->cut_short() : 0},
           {"guidance_searches", guidance_ ? guidance_->searches() : 0},
           {"guidance_kept", guidance_ ? guidance_->kept() : 0},

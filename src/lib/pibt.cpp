@@ -237,7 +237,7 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
     occupied_now_[world.positions[i]] = i;
     next[i] = kNoCell;
   }
-  const bool operations = world.rotation() && opt_.rotation == PibtOptions::Rotation::kOperations;
+  const bool operations = world.rotation() && opt_.rotation == PibtOptions::Rotation::kOperations && !stalled();
   if (!operations) near_distances(world);
   if (operations) {
     plan_operations(world, next, fixed_moves);
@@ -256,6 +256,16 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   preferred_ = nullptr;
   immovable_ = nullptr;
   deadline_ = std::chrono::steady_clock::time_point::max();
+}
+
+// Over operations: more than half of this call's agents have stood kStallSteps steps or more (a
+// jam operations do not get out of); the call is planned over cells instead.
+bool PibtStep::stalled() {
+  size_t stood = 0;
+  for (int i : order_) stood += standing_[i] >= kStallSteps;
+  const bool stall = stood * 2 > order_.size();
+  stalls_ += stall;
+  return stall;
 }
 
 // The mapf step (and the rotation model's kCells): immovable agents, fixed moves and blocked

@@ -50,14 +50,17 @@ std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerPa
   return !thousands(f) && many_cut_cells(f) ? "8" : "0";
 }
 // Fleets filling more than 90% of the free cells: agents wait 500 steps before they set out for a
-// dead end; in the rotation model no agent retreats to let another pass (the swap, after 20 steps
-// standing) and PIBT's configurations are carried out to the end, each the best of 16 runs.
-std::string rule_crowded(const std::string& param, const MapFacts& f, const PlannerParams&) {
+// dead end; in the rotation model PIBT plans 3-action operations (EPIBT), with the swap after 20
+// steps standing. Over cells (given) no agent retreats to let another pass and PIBT's
+// configurations are carried out to the end, each the best of 16 runs.
+std::string rule_crowded(const std::string& param, const MapFacts& f, const PlannerParams& earlier) {
   const bool crowded = crowded_fleet(f);
-  if (param == "rotation-commit") return crowded && f.model() == ActionModel::kRotation ? "1" : "0";
+  const bool rotation = f.model() == ActionModel::kRotation;
+  if (param == "rotation-pibt") return crowded && rotation ? "operations" : "cells";
+  if (param == "rotation-commit") return crowded && rotation ? "1" : "0";
   if (param == "dead-end-wait") return crowded ? "500" : "0";
-  if (param == "rotation-starts") return crowded && f.model() == ActionModel::kRotation ? "16" : "1";
-  return crowded ? "0" : "20";  // rotation-swap-wait
+  if (param == "rotation-starts") return crowded && rotation ? "16" : "1";
+  return crowded && earlier.text("rotation-pibt") == "cells" ? "0" : "20";  // rotation-swap-wait
 }
 // Guidance off where its paths cannot be followed: a crowded fleet, and in the rotation model a
 // fleet of thousands, whose lazily kept paths go stale in the jams of a long run.
@@ -106,9 +109,10 @@ const std::vector<ParamRule>& param_rules() {
        std::string(kRulesFigure) + "motion-forecast", rule_forecast},
       {"crowded-fleet",
        "fleets holding more than 90% of the free cells: agents wait 500 steps before they set out for a dead end "
-       "(dead-end-wait 500); in the rotation model no agent retreats for another (rotation-swap-wait 0, else 20 "
-       "steps standing) and PIBT's configurations are carried out to the end (rotation-commit 1), each the best of 16 "
-       "runs (rotation-starts 16)",
+       "(dead-end-wait 500); in the rotation model PIBT plans operations (rotation-pibt operations, else cells), "
+       "with the swap after 20 steps standing; over cells (given) no agent retreats for another (rotation-swap-wait 0) "
+       "and PIBT's configurations are carried out to the end (rotation-commit 1), each the best of 16 runs "
+       "(rotation-starts 16)",
        std::string(kRulesFigure) + "crowded-fleet", rule_crowded},
       {"guidance-off",
        "PIBT alone moves (guidance none) where guidance paths cannot be followed: fleets holding more than 90% of "
@@ -151,8 +155,9 @@ ParamSpec flag(std::string name, std::string value, std::string meaning, std::st
   return {std::move(name), ParamType::kFlag, 0, 1, {}, std::move(meaning), std::move(value), std::move(rule), std::move(paper)};
 }
 ParamSpec choice(std::string name, std::vector<std::string> choices, std::string value, std::string meaning,
-                 std::string paper = "") {
-  return {std::move(name), ParamType::kChoice, 0, 0, std::move(choices), std::move(meaning), std::move(value), "", std::move(paper)};
+                 std::string paper = "", std::string rule = "") {
+  return {std::move(name), ParamType::kChoice, 0, 0, std::move(choices), std::move(meaning), std::move(value), std::move(rule),
+          std::move(paper)};
 }
 
 constexpr double kBig = 1 << 30;
@@ -165,6 +170,10 @@ ParamSpec preset_row() {
 // PIBT's techniques (the PIBT baseline and GD-RHCR's secondary solver). The paper's PIBT has no swap.
 std::vector<ParamSpec> pibt_rows() {
   return {flag("swap", "1", "LaCAM*'s swap operation (in the rotation model see rotation-swap-wait)", "0"),
+          choice("rotation-pibt", {"operations", "cells"}, "",
+                 "rotation model: PIBT over 3-action operations carried on between steps (EPIBT; with a step "
+                 "budget its LNS spends the rest), or over cells chosen with turns counted and executed turning first",
+                 "operations", "crowded-fleet"),
           integer("rotation-swap-wait", 0, 1000, "",
                   "rotation model: the swap applies to an agent that has stood in its cell this many steps (0 = never)",
                   "crowded-fleet", "0"),
@@ -191,10 +200,6 @@ std::vector<ParamSpec> pibt_rows() {
           flag("priority-reset", "1", "reset an agent's priority when it reaches a goal"),
           choice("tie-break", {"free-first", "random"}, "free-first",
                  "order among equally near cells: an unoccupied one first, or random"),
-          choice("rotation-pibt", {"operations", "cells"}, "cells",
-                 "rotation model: PIBT over 3-action operations carried on between steps (EPIBT; with a step "
-                 "budget its LNS spends the rest), or over cells chosen with turns counted and executed turning first",
-                 "operations"),
           real("traffic-cost", 0, 8, "0",
                "rotation model: extra cost of a forward move into the map's busiest cells (by sampled shortest-path "
                "flow), so distances lead around them (0 = none)"),

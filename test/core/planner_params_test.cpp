@@ -131,17 +131,22 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   EXPECT_EQ(guidance("default", free * 95 / 100, ActionModel::kMapf), "none");
   EXPECT_EQ(guidance("paper", 2500, ActionModel::kMapf), "none");
   // Rule crowded-fleet: over 90% of the free cells dead ends wait 500 steps, and in the rotation
-  // model PIBT's configurations are carried out to the end; not below, not in the paper.
-  auto crowded = [&](const std::string& preset, int agents, ActionModel model) {
+  // model PIBT plans operations, with the swap after 20 steps standing; over cells (given) its
+  // configurations are carried out to the end and nobody swaps. Not below, not in the paper.
+  auto crowded = [&](const std::string& preset, int agents, ActionModel model, const char* way = nullptr) {
     Params p;
     p.set("preset", preset);
+    if (way) p.set("rotation-pibt", way);
     const PlannerParams v = PlannerParams::resolve("gd-rhcr", p, MapFacts(warehouse, agents, model));
-    return std::pair{v.flag("rotation-commit"), v.integer("dead-end-wait")};
+    return std::tuple{v.text("rotation-pibt"), v.integer("rotation-swap-wait"), v.flag("rotation-commit"),
+                      v.integer("dead-end-wait")};
   };
-  EXPECT_EQ(crowded("default", free * 95 / 100, ActionModel::kRotation), std::pair(true, 500));
-  EXPECT_EQ(crowded("default", free * 85 / 100, ActionModel::kRotation), std::pair(false, 0));
-  EXPECT_EQ(crowded("default", free * 95 / 100, ActionModel::kMapf), std::pair(false, 500));
-  EXPECT_EQ(crowded("paper", free * 95 / 100, ActionModel::kRotation), std::pair(false, 0));
+  const int full = free * 95 / 100, less = free * 85 / 100;
+  EXPECT_EQ(crowded("default", full, ActionModel::kRotation), std::tuple("operations", 20, true, 500));
+  EXPECT_EQ(crowded("default", full, ActionModel::kRotation, "cells"), std::tuple("cells", 0, true, 500));
+  EXPECT_EQ(crowded("default", less, ActionModel::kRotation), std::tuple("cells", 20, false, 0));
+  EXPECT_EQ(crowded("default", full, ActionModel::kMapf), std::tuple("cells", 0, false, 500));
+  EXPECT_EQ(crowded("paper", full, ActionModel::kRotation), std::tuple("operations", 0, false, 0));
   // Given values win over the preset and the rules, and say so.
   Params p;
   p.set("preset", "paper");

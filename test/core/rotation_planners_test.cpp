@@ -518,16 +518,21 @@ TEST(RotationPlanners, AnAgentWaitsBeforeItSetsOutForADeadEnd) {
   EXPECT_EQ(to_open.back(), open);
 }
 
-TEST(RotationPlanners, CrowdedFleetsStayValidWithCommittedConfigurations) {
-  // The crowded-fleet rule's configuration (rotation-commit, dead-end-wait) on a map past 90% full:
-  // every step valid, and the fleet moves.
-  run_valid("gd-rhcr", "room-32-32-4.map", ActionModel::kRotation, 640, 60);
-  run_valid("pibt", "random-32-32-20.map", ActionModel::kRotation, 760, 60);
+TEST(RotationPlanners, CrowdedFleetsStayValidWithEitherWayOfPibt) {
+  // The crowded-fleet rule's configuration on a map past 90% full (operations with the swap,
+  // dead-end-wait), and over cells (given) its committed configurations: every step valid, and
+  // the fleet moves.
+  for (const char* way : {"", "cells"}) {
+    Params p;
+    if (*way) p.set("rotation-pibt", way);
+    run_valid("gd-rhcr", "room-32-32-4.map", ActionModel::kRotation, 640, 60, p);
+    run_valid("pibt", "random-32-32-20.map", ActionModel::kRotation, 760, 60, p);
+  }
 }
 
 TEST(RotationPlanners, ACrowdedFleetsConfigurationIsTheBestOfSeveralRunsWithinTheBudget) {
-  // Rule crowded-fleet: each configuration is the best of 16 PIBT runs (rotation-starts), the
-  // runs after the first with the priorities around a random agent shaken. Without a budget every
+  // Rule crowded-fleet over cells: each configuration is the best of 16 PIBT runs (rotation-starts),
+  // the runs after the first with the priorities around a random agent shaken. Without a budget every
   // configuration gets its 16 runs and some are won by a shaken run; with a budget already spent
   // only the first run is made, so nothing is shaken. Every step valid either way.
   const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
@@ -541,6 +546,7 @@ TEST(RotationPlanners, ACrowdedFleetsConfigurationIsTheBestOfSeveralRunsWithinTh
     SCOPED_TRACE(std::string("step-budget ") + budget);
     Params p;
     p.set("step-budget", budget);
+    p.set("rotation-pibt", "cells");
     auto planner = make_planner("gd-rhcr", p, g, agents, 5, ActionModel::kRotation);
     RandomNavigationStream tasks(g, 5);
     const SimResult r = run_simulation(g, dist, tasks, *planner, starts, opt);

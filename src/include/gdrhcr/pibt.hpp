@@ -28,7 +28,9 @@
 // the next operation tried. With a deadline the rest of the time rebuilds agents in random order
 // (the same rule), keeping each change that does not lower the fleet's score (each agent's gain
 // over waiting, weighted by its rank: EPIBT's LNS), until a round gains nothing. Only the first
-// action is executed. PibtOptions::rotation picks these operations or cells chosen with turns
+// action is executed. A call in which more than half of its agents have stood kStallSteps steps
+// or more is planned over cells instead: operations do not get out of some jams that cells do
+// (rooms' doors). PibtOptions::rotation picks these operations or cells chosen with turns
 // counted and executed turning first. The swap applies in this model only to an agent that has
 // stood long (rotation_swap_wait): over operations it retreats, its operations that leave its
 // cell by another way first, and the agent that must get past it follows.
@@ -144,9 +146,11 @@ class PibtStep {
   long starts() const { return starts_; }            // rotation_starts: PIBT runs made
   long starts_won() const { return starts_won_; }    // ... configurations a shaken run gave
   long search_rounds() const { return op_search_rounds_; }  // operations: rounds of the search
+  long stalls() const { return stalls_; }  // operations: calls planned over cells (stalled)
   static constexpr int kStartBox = 4;
   static constexpr double kStartNoise = 5.0;
   static constexpr int kOpSteps = 3;  // actions per operation in the rotation model
+  static constexpr int kStallSteps = 20;  // operations: see stalled()
   static constexpr int kDeadlineStride = 64;
 
  private:
@@ -178,6 +182,7 @@ class PibtStep {
   OpResult build(const WorldView& world, int ai, bool search, double root, int depth, long& counter);
   void rebuild(const WorldView& world, int ai, bool search);
   bool past_deadline(long& counter) const;
+  bool stalled();
   int blocker(int ai, const OpPath& p) const;
   void hold(int ai, const OpChoice& c);
   void reserve(int ai);
@@ -202,6 +207,7 @@ class PibtStep {
   std::vector<Heading> op_carried_heading_;  // ... and heading
   std::vector<int> op_carried_t_;      // ... at this timestep
   long op_search_rounds_ = 0;
+  long stalls_ = 0;
   std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
   long deadline_stops_ = 0;
   void order_candidates(const WorldView& world, int ai, bool pushed, Cell* cand, int m);
