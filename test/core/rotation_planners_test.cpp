@@ -283,6 +283,32 @@ TEST(RotationPlanners, OperationsSwapOutOfADeadEnd) {
   }
 }
 
+TEST(RotationPlanners, OperationsStalledForLongArePlannedOverCells) {
+  // Every agent stands on its goal for kStallSteps steps; then the fourth gets a goal at the far
+  // end of the corridor. From then on more than half of the call (the three) has stood kStallSteps
+  // steps or more, so every call is planned over cells: counted, valid, and the fourth, turning
+  // round first, still gets to its goal.
+  const Grid g = Grid::from_rows({"..........", ".........."});
+  DistTable dist(g, ActionModel::kRotation);
+  PibtOptions o;
+  o.rotation = PibtOptions::Rotation::kOperations;
+  PibtStep pibt(g, 4, 3, o);
+  std::vector<Cell> pos{g.cell(0, 0), g.cell(2, 0), g.cell(4, 0), g.cell(0, 1)};
+  std::vector<Heading> heads{kEast, kEast, kEast, kWest};
+  const Cell far = g.cell(9, 1);
+  std::vector<std::vector<Cell>> goals{{pos[0]}, {pos[1]}, {pos[2]}, {g.cell(0, 1)}};
+  StepValidator validator(g, ActionModel::kRotation);
+  const int steps = PibtStep::kStallSteps + 20;
+  for (int t = 0; t < steps; ++t) {
+    if (t == PibtStep::kStallSteps) goals[3] = {far};  // the fourth sets out once the others stood long
+    ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t, goals, pos, heads));
+  }
+  EXPECT_EQ(pos[3], far);
+  EXPECT_EQ(pos[0], g.cell(0, 0));
+  EXPECT_GE(pibt.stalls(), steps - PibtStep::kStallSteps - 1);
+  EXPECT_LE(pibt.stalls(), steps - PibtStep::kStallSteps + 1);
+}
+
 TEST(RotationPlanners, OperationsSearchTheRestOfTheBudgetAndStayValid) {
   // A crowded fleet (90% of random-32-32-20's free cells) under GD-RHCR with PIBT over
   // operations and a budget: after the first pass the search (EPIBT's LNS) runs until a round
