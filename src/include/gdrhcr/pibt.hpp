@@ -23,9 +23,10 @@
 // ordered by the distance with turns (DistRow::at) from the state they end in. Every agent starts
 // the step holding what is left of its last step's operation (then a wait), so plans carry on; an
 // agent whose carried operation no longer fits waits. Then, nearest its goal first (agents with
-// nothing to reach last), each agent is built: it takes its best operation that is free, or that meets the cells of one agent of lower
-// priority, which is then built around it in turn (recursively); a chain that fails is undone and
-// the next operation tried. With a deadline the rest of the time rebuilds agents in random order
+// nothing to reach last), each agent is built: it takes its best operation that is free, or that
+// meets the cells of one agent of lower priority, which is then built around it in turn
+// (recursively, up to kOpVisits builds of an agent a round); a chain that fails is undone and the
+// next operation tried. With a deadline the rest of the time rebuilds agents in random order
 // (the same rule), keeping each change that does not lower the fleet's score (each agent's gain
 // over waiting, weighted by its rank: EPIBT's LNS), until a round gains nothing. Only the first
 // action is executed. A call in which more than half of its agents have stood kStallSteps steps
