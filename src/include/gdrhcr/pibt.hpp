@@ -160,7 +160,7 @@ class PibtStep {
 
   // Rotation model: operations (see above; pibt_operations.cpp).
   static constexpr int kMaxOps = 1 << (2 * kOpSteps);
-  static constexpr int kOpVisits = 200;   // builds of one agent per round, at most (EPIBT's bound)
+  static constexpr int kOpVisits = 200;  // builds of one agent per round, at most (EPIBT: 10, too few in packed regions)
   static constexpr int kOpDepth = 1000;  // displaced agents built recursively, at most this deep
   struct OpPath {
     Cell cell[kOpSteps + 1];
