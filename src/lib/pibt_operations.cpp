@@ -56,22 +56,16 @@ int carried_code(int code) { return code / 4 + 3 * (kCodes / 4); }
 }  // namespace
 
 void PibtStep::reserve(int ai) {
-  const OpPath& p = op_path_[ai];
+  const OpPath& p = op_held_[ai].path;
   for (int k = 1; k <= kOpSteps; ++k) res(k, p.cell[k]) = ai;
-  op_score_ += op_power_[ai] * (op_wait_cost_[ai] - op_cost_[ai]);
+  op_score_ += op_power_[ai] * (op_wait_cost_[ai] - op_held_[ai].cost);
 }
 
 void PibtStep::release(int ai) {
-  const OpPath& p = op_path_[ai];
+  const OpPath& p = op_held_[ai].path;
   for (int k = 1; k <= kOpSteps; ++k)
     if (res(k, p.cell[k]) == ai) res(k, p.cell[k]) = kFree;
-  op_score_ -= op_power_[ai] * (op_wait_cost_[ai] - op_cost_[ai]);
-}
-
-void PibtStep::hold(int ai, const OpChoice& c) {
-  op_path_[ai] = c.path;
-  op_cost_[ai] = c.cost;
-  op_code_[ai] = c.code;
+  op_score_ -= op_power_[ai] * (op_wait_cost_[ai] - op_held_[ai].cost);
 }
 
 // The one agent whose reserved cells (or a move crossing one of p's) operation p of ai meets:
@@ -202,28 +196,28 @@ PibtStep::OpResult PibtStep::build(const WorldView& world, int ai, bool search, 
   if (op_visit_[ai] != op_round_) op_visit_[ai] = op_round_, op_visits_[ai] = 0;
   ++op_visits_[ai];
   op_on_stack_[ai] = 1;
-  const OpChoice old{op_path_[ai], op_cost_[ai], op_code_[ai]};
+  const OpChoice old = op_held_[ai];
   const OpChoice* cand = &op_cand_[size_t(ai) * kMaxOps];
   for (int c = 0; c < op_cand_n_[ai]; ++c) {
     const int u = blocker(ai, cand[c].path);
     if (u == kBlocked) continue;
     if (u == kFree) {
-      hold(ai, cand[c]);
+      op_held_[ai] = cand[c];
       reserve(ai);
       if (search && op_score_ < op_score_before_ - 1e-9) {
         release(ai);
-        hold(ai, old);
+        op_held_[ai] = old;
         op_on_stack_[ai] = 0;
         return OpResult::kRejected;
       }
       op_on_stack_[ai] = 0;
       return OpResult::kAccepted;
     }
-    if (depth >= kOpDepth || op_on_stack_[u] || world.is_immovable(u) || (op_visit_[u] == op_round_ && op_visits_[u] >= kOpVisits) ||
-        op_key_[u] >= root)
+    if (depth >= kOpDepth || op_on_stack_[u] || world.is_immovable(u) ||
+        (op_visit_[u] == op_round_ && op_visits_[u] >= kOpVisits) || op_key_[u] >= root)
       continue;
     release(u);
-    hold(ai, cand[c]);
+    op_held_[ai] = cand[c];
     reserve(ai);
     ++counter;
     const OpResult r = build(world, u, search, root, depth + 1, counter);
@@ -233,7 +227,7 @@ PibtStep::OpResult PibtStep::build(const WorldView& world, int ai, bool search, 
     }
     release(ai);
     reserve(u);  // u's failed build left it holding its own operation
-    hold(ai, old);
+    op_held_[ai] = old;
     if (r == OpResult::kRejected) {
       op_on_stack_[ai] = 0;
       return r;
@@ -254,15 +248,16 @@ void PibtStep::rebuild(const WorldView& world, int ai, bool search) {
 // when it made that operation's first action; else wait, wait, wait.
 void PibtStep::start_operation(const WorldView& world, int ai) {
   const Pose p = world.pose(ai);
-  const bool carried = op_carried_t_[ai] == world.timestep && op_carried_at_[ai] == p.cell &&
-                       op_carried_heading_[ai] == p.heading && !world.is_immovable(ai);
-  hold(ai, listed(ai, carried ? op_carried_[ai] : kWww));
+  const OpChoice& last = op_held_[ai];
+  const bool carried = op_held_t_[ai] == world.timestep - 1 && last.path.cell[1] == p.cell &&
+                       last.path.heading[1] == p.heading && !world.is_immovable(ai);
+  op_held_[ai] = listed(ai, carried ? carried_code(last.code) : kWww);
 }
 
 // Agent ai and, recursively, every agent whose reserved cells meet its own, fall back to waiting.
 void PibtStep::wait_in_place(const WorldView& world, int ai) {
   const OpChoice& c = listed(ai, kWww);
-  hold(ai, c);
+  op_held_[ai] = c;
   for (int k = 1; k <= kOpSteps; ++k) {
     const int v = res(k, c.path.cell[k]);
     if (v >= 0 && v != ai) {
@@ -282,12 +277,10 @@ void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
                                const std::vector<std::pair<Cell, Cell>>& fixed_moves) {
   const int n = world.num_agents();
   res_.resize(size_t(kOpSteps) * grid_.num_cells(), kFree);
-  if (static_cast<int>(op_path_.size()) < n) {
-    op_path_.resize(n), op_cost_.resize(n), op_code_.resize(n), op_wait_cost_.resize(n), op_power_.resize(n);
+  if (static_cast<int>(op_held_.size()) < n) {
+    op_held_.resize(n), op_held_t_.resize(n, INT_MIN), op_wait_cost_.resize(n), op_power_.resize(n);
     op_key_.resize(n), op_cand_.resize(size_t(n) * kMaxOps), op_cand_n_.resize(n);
     op_visit_.resize(n, 0), op_visits_.resize(n, 0), op_on_stack_.resize(n, 0);
-    op_carried_.resize(n, kWww), op_carried_at_.resize(n, kNoCell), op_carried_heading_.resize(n, kNoHeading);
-    op_carried_t_.resize(n, INT_MIN);
   }
   auto fix = [&](Cell c, int from_k) {
     for (int k = from_k; c != kNoCell && k <= kOpSteps; ++k) res(k, c) = kFixed;
@@ -317,7 +310,7 @@ void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
   op_score_ = 0;
   for (int i : order_) {
     start_operation(world, i);
-    if (blocker(i, op_path_[i]) != kFree) wait_in_place(world, i);
+    if (blocker(i, op_held_[i].path) != kFree) wait_in_place(world, i);
     else reserve(i);
   }
   ++op_round_;
@@ -342,12 +335,10 @@ void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
     }
   }
   for (int i : order_) {
-    const OpPath& p = op_path_[i];
+    const OpPath& p = op_held_[i].path;
     next[i] = p.cell[1];
     (*world.next_headings)[i] = p.heading[1];
-    op_carried_[i] = carried_code(op_code_[i]);
-    op_carried_at_[i] = p.cell[1], op_carried_heading_[i] = p.heading[1];
-    op_carried_t_[i] = world.timestep + 1;
+    op_held_t_[i] = world.timestep;  // the next step carries it on (start_operation)
     for (int k = 1; k <= kOpSteps; ++k) res(k, p.cell[k]) = kFree;
   }
   for (auto& [from, to] : fixed_moves)

@@ -185,15 +185,13 @@ class PibtStep {
   bool past_deadline(long& counter) const;
   bool stalled();
   int blocker(int ai, const OpPath& p) const;
-  void hold(int ai, const OpChoice& c);
   void reserve(int ai);
   void release(int ai);
   int& res(int k, Cell c) { return res_[size_t(k - 1) * grid_.num_cells() + c]; }
   int res(int k, Cell c) const { return res_[size_t(k - 1) * grid_.num_cells() + c]; }
   std::vector<int> res_;          // kOpSteps x cells: who holds cell c at t+k; -1 free, kFixed
-  std::vector<OpPath> op_path_;   // per agent: the operation it holds, its path ...
-  std::vector<int> op_cost_;      // ... its cost
-  std::vector<int16_t> op_code_;  // ... and its code
+  std::vector<OpChoice> op_held_;  // per agent: the operation it holds (carried on to the next step)
+  std::vector<int> op_held_t_;     // ... planned at this timestep
   std::vector<int> op_wait_cost_;  // per agent: the cost of waiting
   std::vector<double> op_power_;   // per agent: its weight in the score
   std::vector<double> op_key_;     // per agent: its priority this call (larger first)
@@ -203,10 +201,6 @@ class PibtStep {
   std::vector<uint8_t> op_on_stack_;
   int op_round_ = 0;
   double op_score_ = 0, op_score_before_ = 0;
-  std::vector<int16_t> op_carried_;    // per agent: the operation carried on to the next step,
-  std::vector<Cell> op_carried_at_;    // ... from this cell
-  std::vector<Heading> op_carried_heading_;  // ... and heading
-  std::vector<int> op_carried_t_;      // ... at this timestep
   long op_search_rounds_ = 0;
   long stalls_ = 0;
   std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
