@@ -26,7 +26,7 @@ nlohmann::json PibtPlanner::params() const {
                       {"priority_reset", o.priority_reset},
                       {"swap", o.swap},
                       {"tie_break", o.tie_break == PibtOptions::TieBreak::kFreeFirst ? "free-first" : "random"},
-                      {"rotation_pibt", o.rotation == PibtOptions::Rotation::kCells ? "cells" : "operations"},
+                      {"rotation_pibt", PibtOptions::name(o.rotation)},
                       {"guidance", guidance_ ? "local" : "none"}};
   if (guidance_) {
     p["lg_window"] = guidance_->config().window;

@@ -237,7 +237,7 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
     occupied_now_[world.positions[i]] = i;
     next[i] = kNoCell;
   }
-  const bool operations = world.rotation() && opt_.rotation == PibtOptions::Rotation::kOperations && !stalled();
+  const bool operations = over_operations(world);
   if (!operations) near_distances(world);
   if (operations) {
     plan_operations(world, next, fixed_moves);
@@ -266,6 +266,30 @@ bool PibtStep::stalled() {
   const bool stall = stood * 2 > order_.size();
   stalls_ += stall;
   return stall;
+}
+
+// Whether this call plans over operations (see PibtOptions::Rotation): kOperations unless stalled,
+// kAuto when also the deadline leaves the search room (kOpRoom; a call after one over operations
+// stays with them down to kOpStay, so that the way does not change at every step when the room is
+// near the bound). The first pass's time is known from the calls over operations; each call over
+// cells lowers it by kOpRetry, so that operations are tried again now and then (a first call,
+// computing rows, or a slow step does not rule them out for good; a change of way costs the fleet
+// a step or two, so seldom).
+bool PibtStep::over_operations(const WorldView& world) {
+  using Clock = std::chrono::steady_clock;
+  if (!world.rotation() || opt_.rotation == PibtOptions::Rotation::kCells) return false;
+  if (opt_.rotation == PibtOptions::Rotation::kAuto) {
+    const double room = op_auto_ ? kOpStay : kOpRoom;
+    op_auto_ = deadline_ != Clock::time_point::max() &&
+               std::chrono::duration<double>(deadline_ - Clock::now()).count() >= room * op_pass_s_;
+    if (!op_auto_) {
+      op_pass_s_ *= kOpRetry;
+      return false;
+    }
+  }
+  if (stalled()) return false;
+  ++op_calls_;
+  return true;
 }
 
 // The mapf step (and the rotation model's kCells): immovable agents, fixed moves and blocked

@@ -275,6 +275,7 @@ void PibtStep::wait_in_place(const WorldView& world, int ai) {
 // weighted by their priority's rank). Each agent's first action is its move.
 void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
                                const std::vector<std::pair<Cell, Cell>>& fixed_moves) {
+  const auto start = std::chrono::steady_clock::now();
   const int n = world.num_agents();
   res_.resize(size_t(kOpSteps) * grid_.num_cells(), kFree);
   if (static_cast<int>(op_held_.size()) < n) {
@@ -314,13 +315,20 @@ void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
     else reserve(i);
   }
   ++op_round_;
+  size_t reached = 0;  // agents of the priority order the first pass got to
   for (int i : order_) {
     if (std::chrono::steady_clock::now() >= deadline_) {  // the rest keep the operation they hold
       ++deadline_stops_;
       break;
     }
+    ++reached;
     if (op_visit_[i] != op_round_ && !world.is_immovable(i)) rebuild(world, i, false);
   }
+  // The first pass's time (kAuto), scaled up to the whole call when the deadline cut it short, and
+  // smoothed over the calls (one slow step should not change the way).
+  const double pass = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double whole = pass * static_cast<double>(order_.size()) / static_cast<double>(std::max<size_t>(reached, 1));
+  op_pass_s_ = op_pass_s_ > 0 ? op_pass_s_ + kOpPassWeight * (whole - op_pass_s_) : whole;
   if (deadline_ != std::chrono::steady_clock::time_point::max()) {
     std::vector<int> shuffled(order_);
     for (double before = -1; op_score_ > before + 1e-9 && std::chrono::steady_clock::now() < deadline_;) {

@@ -56,7 +56,7 @@ std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerPa
 std::string rule_crowded(const std::string& param, const MapFacts& f, const PlannerParams& earlier) {
   const bool crowded = crowded_fleet(f);
   const bool rotation = f.model() == ActionModel::kRotation;
-  if (param == "rotation-pibt") return crowded && rotation ? "operations" : "cells";
+  if (param == "rotation-pibt") return crowded && rotation ? "auto" : "cells";
   if (param == "rotation-commit") return crowded && rotation ? "1" : "0";
   if (param == "dead-end-wait") return crowded ? "500" : "0";
   if (param == "rotation-starts") return crowded && rotation ? "16" : "1";
@@ -109,7 +109,8 @@ const std::vector<ParamRule>& param_rules() {
        std::string(kRulesFigure) + "motion-forecast", rule_forecast},
       {"crowded-fleet",
        "fleets holding more than 90% of the free cells: agents wait 500 steps before they set out for a dead end "
-       "(dead-end-wait 500); in the rotation model PIBT plans operations (rotation-pibt operations, else cells), "
+       "(dead-end-wait 500); in the rotation model PIBT plans over operations when the step budget leaves room for "
+       "their search, else over cells (rotation-pibt auto; elsewhere cells), "
        "with the swap after 20 steps standing; over cells (given) no agent retreats for another (rotation-swap-wait 0) "
        "and PIBT's configurations are carried out to the end (rotation-commit 1), each the best of 16 runs "
        "(rotation-starts 16)",
@@ -170,9 +171,11 @@ ParamSpec preset_row() {
 // PIBT's techniques (the PIBT baseline and GD-RHCR's secondary solver). The paper's PIBT has no swap.
 std::vector<ParamSpec> pibt_rows() {
   return {flag("swap", "1", "LaCAM*'s swap operation (in the rotation model see rotation-swap-wait)", "0"),
-          choice("rotation-pibt", {"operations", "cells"}, "",
+          choice("rotation-pibt", {"operations", "cells", "auto"}, "",
                  "rotation model: PIBT over 3-action operations carried on between steps (EPIBT; with a step "
-                 "budget its LNS spends the rest), or over cells chosen with turns counted and executed turning first",
+                 "budget its LNS spends the rest), over cells chosen with turns counted and executed turning first, "
+                 "or (auto) over operations when the time left to the step's deadline is 1.5 times their first "
+                 "pass (room for the search), else over cells",
                  "operations", "crowded-fleet"),
           integer("rotation-swap-wait", 0, 1000, "",
                   "rotation model: the swap applies to an agent that has stood in its cell this many steps (0 = never)",

@@ -20,7 +20,10 @@ PibtOptions pibt_options(const PlannerParams& v) {
   o.priority_reset = v.flag("priority-reset");
   o.swap = v.flag("swap");
   o.tie_break = v.text("tie-break") == "random" ? PibtOptions::TieBreak::kRandom : PibtOptions::TieBreak::kFreeFirst;
-  o.rotation = v.text("rotation-pibt") == "cells" ? PibtOptions::Rotation::kCells : PibtOptions::Rotation::kOperations;
+  const std::string rotation = v.text("rotation-pibt");
+  o.rotation = rotation == "cells"  ? PibtOptions::Rotation::kCells
+               : rotation == "auto" ? PibtOptions::Rotation::kAuto
+                                    : PibtOptions::Rotation::kOperations;
   o.rotation_swap_wait = v.integer("rotation-swap-wait");
   o.rotation_commit = v.flag("rotation-commit");
   o.rotation_starts = v.integer("rotation-starts");

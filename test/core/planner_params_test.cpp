@@ -131,7 +131,8 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   EXPECT_EQ(guidance("default", free * 95 / 100, ActionModel::kMapf), "none");
   EXPECT_EQ(guidance("paper", 2500, ActionModel::kMapf), "none");
   // Rule crowded-fleet: over 90% of the free cells dead ends wait 500 steps, and in the rotation
-  // model PIBT plans operations, with the swap after 20 steps standing; over cells (given) its
+  // model PIBT plans over operations when the budget leaves room for their search (auto), with the
+  // swap after 20 steps standing; over cells (given) its
   // configurations are carried out to the end and nobody swaps. Not below, not in the paper.
   auto crowded = [&](const std::string& preset, int agents, ActionModel model, const char* way = nullptr) {
     Params p;
@@ -142,7 +143,8 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
                       v.integer("dead-end-wait")};
   };
   const int full = free * 95 / 100, less = free * 85 / 100;
-  EXPECT_EQ(crowded("default", full, ActionModel::kRotation), std::tuple("operations", 20, true, 500));
+  EXPECT_EQ(crowded("default", full, ActionModel::kRotation), std::tuple("auto", 20, true, 500));
+  EXPECT_EQ(crowded("default", full, ActionModel::kRotation, "operations"), std::tuple("operations", 20, true, 500));
   EXPECT_EQ(crowded("default", full, ActionModel::kRotation, "cells"), std::tuple("cells", 0, true, 500));
   EXPECT_EQ(crowded("default", less, ActionModel::kRotation), std::tuple("cells", 20, false, 0));
   EXPECT_EQ(crowded("default", full, ActionModel::kMapf), std::tuple("cells", 0, false, 500));

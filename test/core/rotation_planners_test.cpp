@@ -7,6 +7,7 @@
 #include <dirent.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <functional>
 
@@ -282,6 +283,32 @@ TEST(RotationPlanners, OperationsSwapOutOfADeadEnd) {
     EXPECT_EQ(b_reached, wait > 0);
     EXPECT_EQ(pibt.swaps() > 0, wait > 0);
   }
+}
+
+TEST(RotationPlanners, AutoPlansOverOperationsOnlyWhenTheDeadlineLeavesRoom) {
+  // kAuto: the first call has a deadline far off and is planned over operations (its first pass
+  // is timed); a call whose deadline has passed, or that has none, is planned over cells; a far
+  // deadline brings operations back. Every step is valid and both agents reach their goals.
+  const Grid g = Grid::from_rows({"..........", ".........."});
+  DistTable dist(g, ActionModel::kRotation);
+  PibtOptions o;
+  o.rotation = PibtOptions::Rotation::kAuto;
+  PibtStep pibt(g, 2, 7, o);
+  std::vector<Cell> pos{g.cell(0, 0), g.cell(9, 1)};
+  std::vector<Heading> heads{kEast, kWest};
+  const std::vector<std::vector<Cell>> goals{{g.cell(9, 0)}, {g.cell(0, 1)}};
+  StepValidator validator(g, ActionModel::kRotation);
+  using Clock = std::chrono::steady_clock;
+  const long expect[] = {1, 1, 1, 2, 2, 2};  // operation calls after each step
+  for (int t = 0; t < 30; ++t) {
+    const int phase = t % 6;
+    if (phase == 0 || phase == 3) pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
+    else if (phase == 1 || phase == 4) pibt.set_deadline(Clock::now() - std::chrono::seconds(1));
+    ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t, goals, pos, heads));
+    EXPECT_EQ(pibt.operation_calls(), 2 * (t / 6) + expect[phase]) << "step " << t;
+  }
+  EXPECT_EQ(pos[0], g.cell(9, 0));
+  EXPECT_EQ(pos[1], g.cell(0, 1));
 }
 
 TEST(RotationPlanners, OperationsStalledForLongArePlannedOverCells) {

@@ -61,9 +61,13 @@ struct PibtOptions {
   // 2404.16162), then executes the step by turning first: an agent facing its next cell goes
   // forward, one that does not turns towards it and stays, and whoever was to enter a staying
   // agent's cell stays too (rotation_actions_for_step, mapf_in_rotation.hpp). One push per agent,
-  // so its time is linear in the agents, as in the mapf model.
-  enum class Rotation { kOperations, kCells };
+  // so its time is linear in the agents, as in the mapf model. kAuto plans a call over operations
+  // when the time left to its deadline is kOpRoom times what the first pass over operations takes
+  // (so the search has room), else over cells: without a deadline, or at small budgets, operations
+  // do worse than cells in packed crowds (docs/results.md, session 36).
+  enum class Rotation { kOperations, kCells, kAuto };
   Rotation rotation = Rotation::kOperations;
+  static const char* name(Rotation r) { return r == Rotation::kCells ? "cells" : r == Rotation::kAuto ? "auto" : "operations"; }
   // Rotation model: the swap starts only for an agent that has stood in its cell this many steps
   // (0: never), and goes on while its partner still needs it (over operations: it retreats). Used
   // at every step it holds agents back (a retreat costs turns); without it an agent heading into a
@@ -148,10 +152,15 @@ class PibtStep {
   long starts_won() const { return starts_won_; }    // ... configurations a shaken run gave
   long search_rounds() const { return op_search_rounds_; }  // operations: rounds of the search
   long stalls() const { return stalls_; }  // operations: calls planned over cells (stalled)
+  long operation_calls() const { return op_calls_; }  // rotation model: calls planned over operations
   static constexpr int kStartBox = 4;
   static constexpr double kStartNoise = 5.0;
   static constexpr int kOpSteps = 3;  // actions per operation in the rotation model
   static constexpr int kStallSteps = 20;  // operations: see stalled()
+  static constexpr double kOpRoom = 1.5;        // kAuto: see Rotation
+  static constexpr double kOpStay = 1.25;       // kAuto: see over_operations
+  static constexpr double kOpRetry = 0.995;     // kAuto: see over_operations
+  static constexpr double kOpPassWeight = 0.1;  // kAuto: weight of the last first pass in its estimate
   static constexpr int kDeadlineStride = 64;
 
  private:
@@ -184,6 +193,7 @@ class PibtStep {
   void rebuild(const WorldView& world, int ai, bool search);
   bool past_deadline(long& counter) const;
   bool stalled();
+  bool over_operations(const WorldView& world);
   int blocker(int ai, const OpPath& p) const;
   void reserve(int ai);
   void release(int ai);
@@ -203,6 +213,9 @@ class PibtStep {
   double op_score_ = 0, op_score_before_ = 0;
   long op_search_rounds_ = 0;
   long stalls_ = 0;
+  long op_calls_ = 0;
+  bool op_auto_ = false;  // kAuto: the last call was planned over operations
+  double op_pass_s_ = 0;  // kAuto: the first pass over operations, in seconds, smoothed (see over_operations)
   std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
   long deadline_stops_ = 0;
   void order_candidates(const WorldView& world, int ai, bool pushed, Cell* cand, int m);
