@@ -576,14 +576,16 @@ TEST(RotationPlanners, AnAgentWaitsBeforeItSetsOutForADeadEnd) {
 }
 
 TEST(RotationPlanners, CrowdedFleetsStayValidWithEitherWayOfPibt) {
-  // The crowded-fleet rule's configuration on a map past 90% full (operations with the swap,
-  // dead-end-wait), and over cells (given) its committed configurations: every step valid, and
-  // the fleet moves.
-  for (const char* way : {"", "cells"}) {
+  // The crowded-fleet rule's configuration on a map past 90% full (auto with a step budget,
+  // operations and cells changing ways; the swap, dead-end-wait), over operations (given) and over
+  // cells (given) its committed configurations: every step valid, and the fleet moves.
+  for (const char* way : {"", "operations", "cells"}) {
+    SCOPED_TRACE(std::string("rotation-pibt ") + way);
     Params p;
     if (*way) p.set("rotation-pibt", way);
+    run_valid("pibt", "random-32-32-20.map", ActionModel::kRotation, 760, 60, p);  // (no budget: auto is cells)
+    if (!*way) p.set("step-budget", "0.01");
     run_valid("gd-rhcr", "room-32-32-4.map", ActionModel::kRotation, 640, 60, p);
-    run_valid("pibt", "random-32-32-20.map", ActionModel::kRotation, 760, 60, p);
   }
 }
 
