@@ -89,6 +89,18 @@ int start_kit_action(Action a) {
 
 }  // namespace
 
+void OverrunMemory::add(double overrun_s) {
+  if (last_.size() < static_cast<size_t>(kWindow)) last_.push_back(overrun_s);
+  else last_[next_] = overrun_s;
+  next_ = (next_ + 1) % kWindow;
+  double first = 0, second = 0;  // the two largest (none below 0)
+  for (double o : last_) {
+    if (o > first) second = first, first = o;
+    else if (o > second) second = o;
+  }
+  planned_ = second;
+}
+
 int default_dist_budget_mb(uint64_t available_mb) {
   if (available_mb == 0) return kDistBudgetMb;
   return static_cast<int>(std::clamp<uint64_t>(available_mb * 3 / 4, 1, kDistBudgetMb));
@@ -201,7 +213,7 @@ struct Bridge::Impl {
     auto flush = [&] {
       const auto t = Clock::now();
       planning_dist->prefetch(batch);
-      if (!batch.empty()) batch_s = std::max(kOverrunDecay * batch_s, std::chrono::duration<double>(Clock::now() - t).count());
+      if (!batch.empty()) batch_s = std::max(kBatchDecay * batch_s, std::chrono::duration<double>(Clock::now() - t).count());
       some = some || !batch.empty();
       batch.clear();
     };
@@ -267,11 +279,11 @@ struct Bridge::Impl {
                       ActionModel::kRotation);
   }
 
-  static constexpr double kOverrunDecay = 0.99;  // per step, of the overrun remembered
   static constexpr int kRowBatch = 2;  // rows computed at once: one row's time on two cores
   static constexpr double kRowsShare = 0.8;  // of the preprocessing limit, until the rows stop
-  double overrun_s = 0;  // how far the planner's steps ran past their budget lately
-  double batch_s = 0;    // the slowest batch of rows lately (decaying by kOverrunDecay a batch)
+  OverrunMemory overrun;  // how far the planner's steps ran past their budget lately
+  static constexpr double kBatchDecay = 0.99;  // per batch, of batch_s
+  double batch_s = 0;     // the slowest batch of rows lately
   BridgeStats stats;
   BridgeOptions options;
   std::FILE* times = nullptr;
@@ -398,7 +410,7 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
   if (capped) {
     const double used = std::chrono::duration<double>(t_plan - t0).count();
     const double share = kPlannerShare * m.options.budget_ms / 1000.0;
-    view.step_budget_s = std::max(share / 10, share - used - m.overrun_s);
+    view.step_budget_s = std::max(share / 10, share - used - m.overrun.planned_s());
   }
   const uint64_t rows_before = m.planning_dist->bfs_count();
   m.planner->plan_step(view, m.next);
@@ -406,7 +418,7 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
   m.stats.rows_in_planner += planner_rows;
   if (capped) {
     const double ran = std::chrono::duration<double>(Clock::now() - t_plan).count();
-    m.overrun_s = std::max(Impl::kOverrunDecay * m.overrun_s, ran - view.step_budget_s);
+    m.overrun.add(ran - view.step_budget_s);
     const double took_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     if (took_ms > m.options.budget_ms)
       std::fprintf(stderr,

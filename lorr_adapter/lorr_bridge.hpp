@@ -74,6 +74,23 @@ struct BridgeStats {
   uint64_t evictions = 0;             // rows the distance table dropped to keep its memory budget
 };
 
+// How far the planner's next step may run past the budget it is given (the work after its
+// deadlines), for the adapter to plan for: the second largest overrun of the last kWindow steps
+// (their 99th percentile). A lone slow step (the first, with its allocations) is forgotten, so it
+// does not shrink the budgets of the hundreds of steps after it; an overrun that comes back more
+// than once in kWindow steps is planned for, so at most about 1% of the steps run over.
+class OverrunMemory {
+ public:
+  static constexpr int kWindow = 200;
+  void add(double overrun_s);  // one step's overrun (negative: it ended early)
+  double planned_s() const { return planned_; }
+
+ private:
+  std::vector<double> last_;
+  size_t next_ = 0;
+  double planned_ = 0;
+};
+
 class Bridge {
  public:
   // map[row * cols + col] = 1 for a blocked cell (the Start-Kit's env->map). Throws with a

@@ -204,3 +204,23 @@ TEST(LorrBridge, TheRowsMemoryKeepsWithinTheMemoryAvailableUnlessGiven) {
 }
 
 }  // namespace
+
+TEST(LorrBridge, AOneOffOverrunIsForgottenAndARecurringOneIsPlannedFor) {
+  // The first step runs 75 ms over (its allocations): the next steps are not planned for it. Steps
+  // ending early plan for nothing. Two overruns within the window (over 1% of its steps) are: the
+  // smaller of the two, until one of them leaves the window.
+  using gdrhcr_lorr::OverrunMemory;
+  OverrunMemory m;
+  m.add(0.075);
+  EXPECT_EQ(m.planned_s(), 0);
+  for (int k = 0; k < 50; ++k) m.add(-0.002);
+  EXPECT_EQ(m.planned_s(), 0);
+  m.add(0.003);
+  EXPECT_DOUBLE_EQ(m.planned_s(), 0.003);
+  m.add(0.004);
+  EXPECT_DOUBLE_EQ(m.planned_s(), 0.004);
+  for (int k = 0; k < OverrunMemory::kWindow - 52; ++k) m.add(-0.001);  // the 75 ms leaves
+  EXPECT_DOUBLE_EQ(m.planned_s(), 0.003);
+  for (int k = 0; k < 51; ++k) m.add(-0.001);  // then the 3 ms: the 4 ms alone is forgotten
+  EXPECT_EQ(m.planned_s(), 0);
+}
