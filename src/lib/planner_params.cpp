@@ -12,6 +12,7 @@
 
 #include "gdrhcr/cut_cells.hpp"
 #include "gdrhcr/lanes.hpp"
+#include "gdrhcr/pibt.hpp"
 
 namespace gdrhcr {
 
@@ -168,14 +169,16 @@ ParamSpec preset_row() {
                 "default: the product configuration; paper: the paper's exact one (parameters given explicitly win)");
 }
 
+std::string fmt_number(double x);
+
 // PIBT's techniques (the PIBT baseline and GD-RHCR's secondary solver). The paper's PIBT has no swap.
 std::vector<ParamSpec> pibt_rows() {
   return {flag("swap", "1", "LaCAM*'s swap operation (in the rotation model see rotation-swap-wait)", "0"),
           choice("rotation-pibt", {"operations", "cells", "auto"}, "",
                  "rotation model: PIBT over 3-action operations carried on between steps (EPIBT; with a step "
                  "budget its LNS spends the rest), over cells chosen with turns counted and executed turning first, "
-                 "or (auto) over operations when the time left to the step's deadline is 1.5 times their first "
-                 "pass (room for the search), else over cells",
+                 "or (auto) over operations when the time left to the step's deadline is " +
+                     fmt_number(PibtStep::kOpRoom) + " times their first pass (room for the search), else over cells",
                  "operations", "crowded-fleet"),
           integer("rotation-swap-wait", 0, 1000, "",
                   "rotation model: the swap applies to an agent that has stood in its cell this many steps (0 = never)",
