@@ -214,7 +214,7 @@ PibtStep::OpResult PibtStep::build(const WorldView& world, int ai, bool search, 
       return OpResult::kAccepted;
     }
     if (depth >= kOpDepth || op_on_stack_[u] || world.is_immovable(u) ||
-        (op_visit_[u] == op_round_ && op_visits_[u] >= kOpVisits) || op_key_[u] >= root)
+        (op_visit_[u] == op_round_ && op_visits_[u] >= (search ? kOpSearchVisits : kOpVisits)) || op_key_[u] >= root)
       continue;
     release(u);
     op_held_[ai] = cand[c];

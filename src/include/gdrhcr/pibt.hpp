@@ -25,7 +25,8 @@
 // agent whose carried operation no longer fits waits. Then, nearest its goal first (agents with
 // nothing to reach last), each agent is built: it takes its best operation that is free, or that
 // meets the cells of one agent of lower priority, which is then built around it in turn
-// (recursively, up to kOpVisits builds of an agent a round); a chain that fails is undone and the
+// (recursively, up to kOpVisits builds of an agent in the first pass, kOpSearchVisits a round of
+// the search); a chain that fails is undone and the
 // next operation tried. With a deadline the rest of the time rebuilds agents in random order
 // (the same rule), keeping each change that does not lower the fleet's score (each agent's gain
 // over waiting, weighted by its rank: EPIBT's LNS), until a round gains nothing. Only the first
@@ -169,7 +170,8 @@ class PibtStep {
 
   // Rotation model: operations (see above; pibt_operations.cpp).
   static constexpr int kMaxOps = 1 << (2 * kOpSteps);
-  static constexpr int kOpVisits = 200;  // builds of one agent per round, at most (EPIBT: 10, too few in packed regions)
+  static constexpr int kOpVisits = 200;  // builds of one agent in the first pass, at most (EPIBT: 10, too few in packed regions)
+  static constexpr int kOpSearchVisits = 10;  // ... per round of the search (EPIBT's: cheap rounds, more of them)
   static constexpr int kOpDepth = 1000;  // displaced agents built recursively, at most this deep
   struct OpPath {
     Cell cell[kOpSteps + 1];
