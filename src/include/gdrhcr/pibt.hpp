@@ -26,9 +26,10 @@
 // nothing to reach last), each agent is built: it takes its best operation that is free, or that
 // meets the cells of one agent of lower priority, which is then built around it in turn
 // (recursively, up to kOpVisits builds of an agent in the first pass, kOpSearchVisits a round of
-// the search); a chain that fails is undone and the next operation tried. With a deadline the rest of the time rebuilds agents in random order
-// (the same rule), keeping each change that does not lower the fleet's score (each agent's gain
-// over waiting, weighted by its rank: EPIBT's LNS), until a round gains nothing. Only the first
+// the search); a chain that fails is undone and the next operation tried. With a deadline the
+// rest of the time rebuilds agents in random order (the same rule), keeping each change that does
+// not lower the fleet's score (each agent's gain over waiting, weighted by its rank: EPIBT's LNS),
+// until a round gains nothing. Only the first
 // action is executed. A call in which more than half of its agents have stood kStallSteps steps
 // or more is planned over cells instead: operations do not get out of some jams that cells do
 // (rooms' doors). PibtOptions::rotation picks these operations or cells chosen with turns
