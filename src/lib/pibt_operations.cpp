@@ -214,7 +214,7 @@ PibtStep::OpResult PibtStep::build(const WorldView& world, int ai, bool search, 
       return OpResult::kAccepted;
     }
     if (depth >= kOpDepth || op_on_stack_[u] || world.is_immovable(u) ||
-        (op_visit_[u] == op_round_ && op_visits_[u] >= (search ? op_search_visits_ : kOpVisits)) || op_key_[u] >= root)
+        (op_visit_[u] == op_round_ && op_visits_[u] >= kOpVisits) || op_key_[u] >= root)
       continue;
     release(u);
     op_held_[ai] = cand[c];
@@ -331,14 +331,7 @@ void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
   op_pass_s_ = op_pass_s_ > 0 ? op_pass_s_ + kOpPassWeight * (whole - op_pass_s_) : whole;
   if (deadline_ != std::chrono::steady_clock::time_point::max()) {
     std::vector<int> shuffled(order_);
-    // Cheap rounds first (kOpSearchVisits builds of an agent), then, once one gains nothing, rounds
-    // with the first pass's kOpVisits, until one of those gains nothing.
-    op_search_visits_ = kOpSearchVisits;
-    for (double before = -1; std::chrono::steady_clock::now() < deadline_;) {
-      if (op_score_ <= before + 1e-9) {
-        if (op_search_visits_ == kOpVisits) break;
-        op_search_visits_ = kOpVisits;
-      }
+    for (double before = -1; op_score_ > before + 1e-9 && std::chrono::steady_clock::now() < deadline_;) {
       before = op_score_;
       std::shuffle(shuffled.begin(), shuffled.end(), rng_);
       ++op_round_;

@@ -25,11 +25,10 @@
 // agent whose carried operation no longer fits waits. Then, nearest its goal first (agents with
 // nothing to reach last), each agent is built: it takes its best operation that is free, or that
 // meets the cells of one agent of lower priority, which is then built around it in turn
-// (recursively, up to kOpVisits builds of an agent in the first pass, kOpSearchVisits a round of
-// the search until a round gains nothing, then kOpVisits); a chain that fails is undone and the next operation tried. With a deadline the
-// rest of the time rebuilds agents in random order (the same rule), keeping each change that does
-// not lower the fleet's score (each agent's gain over waiting, weighted by its rank: EPIBT's LNS),
-// until a round gains nothing. Only the first
+// (recursively, up to kOpVisits builds of an agent a round); a chain that fails is undone and the
+// next operation tried. With a deadline the rest of the time rebuilds agents in random order
+// (the same rule), keeping each change that does not lower the fleet's score (each agent's gain
+// over waiting, weighted by its rank: EPIBT's LNS), until a round gains nothing. Only the first
 // action is executed. A call in which more than half of its agents have stood kStallSteps steps
 // or more is planned over cells instead: operations do not get out of some jams that cells do
 // (rooms' doors). PibtOptions::rotation picks these operations or cells chosen with turns
@@ -170,8 +169,7 @@ class PibtStep {
 
   // Rotation model: operations (see above; pibt_operations.cpp).
   static constexpr int kMaxOps = 1 << (2 * kOpSteps);
-  static constexpr int kOpVisits = 200;  // builds of one agent in the first pass, at most (EPIBT: 10, too few in packed regions)
-  static constexpr int kOpSearchVisits = 10;  // ... per round of the search's first rounds (EPIBT's)
+  static constexpr int kOpVisits = 200;  // builds of one agent per round, at most (EPIBT: 10, too few in packed regions)
   static constexpr int kOpDepth = 1000;  // displaced agents built recursively, at most this deep
   struct OpPath {
     Cell cell[kOpSteps + 1];
@@ -212,7 +210,6 @@ class PibtStep {
   std::vector<int> op_visit_, op_visits_;  // per agent: the round of its last build, builds in it
   std::vector<uint8_t> op_on_stack_;
   int op_round_ = 0;
-  int op_search_visits_ = kOpVisits;  // builds of one agent per round of the search, at most
   double op_score_ = 0, op_score_before_ = 0;
   long op_search_rounds_ = 0;
   long stalls_ = 0;
