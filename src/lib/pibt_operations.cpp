@@ -268,6 +268,41 @@ void PibtStep::wait_in_place(const WorldView& world, int ai) {
   reserve(ai);
 }
 
+// The first pass: the agents built in priority order until the deadline, the rest keeping the
+// operation they hold. Its time since `start` (kAuto), scaled up to the whole call when the
+// deadline cut it short, is smoothed over the calls (one slow step should not change the way).
+void PibtStep::first_pass(const WorldView& world, std::chrono::steady_clock::time_point start) {
+  ++op_round_;
+  size_t reached = 0;  // agents of the priority order the first pass got to
+  for (int i : order_) {
+    if (std::chrono::steady_clock::now() >= deadline_) {  // the rest keep the operation they hold
+      ++deadline_stops_;
+      break;
+    }
+    ++reached;
+    if (op_visit_[i] != op_round_ && !world.is_immovable(i)) rebuild(world, i, false);
+  }
+  const double pass = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double whole = pass * static_cast<double>(order_.size()) / static_cast<double>(std::max<size_t>(reached, 1));
+  op_pass_s_ = op_pass_s_ > 0 ? op_pass_s_ + kOpPassWeight * (whole - op_pass_s_) : whole;
+}
+
+// EPIBT's LNS until the deadline: agents rebuilt in random order, each change kept when the
+// fleet's score does not fall, until a round gains nothing.
+void PibtStep::search_operations(const WorldView& world) {
+  std::vector<int> shuffled(order_);
+  for (double before = -1; op_score_ > before + 1e-9 && std::chrono::steady_clock::now() < deadline_;) {
+    before = op_score_;
+    std::shuffle(shuffled.begin(), shuffled.end(), rng_);
+    ++op_round_;
+    ++op_search_rounds_;
+    for (int i : shuffled) {
+      if (std::chrono::steady_clock::now() >= deadline_) break;
+      if (op_visit_[i] != op_round_ && !world.is_immovable(i)) rebuild(world, i, true);
+    }
+  }
+}
+
 // The step in the rotation model (EPIBT): every agent of the call starts holding the operation it
 // carried on from the last step (or waits), the agents are built in priority order, and with a
 // deadline the rest of the time goes to rebuilding agents in random order, keeping each change
@@ -314,34 +349,8 @@ void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
     if (blocker(i, op_held_[i].path) != kFree) wait_in_place(world, i);
     else reserve(i);
   }
-  ++op_round_;
-  size_t reached = 0;  // agents of the priority order the first pass got to
-  for (int i : order_) {
-    if (std::chrono::steady_clock::now() >= deadline_) {  // the rest keep the operation they hold
-      ++deadline_stops_;
-      break;
-    }
-    ++reached;
-    if (op_visit_[i] != op_round_ && !world.is_immovable(i)) rebuild(world, i, false);
-  }
-  // The first pass's time (kAuto), scaled up to the whole call when the deadline cut it short, and
-  // smoothed over the calls (one slow step should not change the way).
-  const double pass = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double whole = pass * static_cast<double>(order_.size()) / static_cast<double>(std::max<size_t>(reached, 1));
-  op_pass_s_ = op_pass_s_ > 0 ? op_pass_s_ + kOpPassWeight * (whole - op_pass_s_) : whole;
-  if (deadline_ != std::chrono::steady_clock::time_point::max()) {
-    std::vector<int> shuffled(order_);
-    for (double before = -1; op_score_ > before + 1e-9 && std::chrono::steady_clock::now() < deadline_;) {
-      before = op_score_;
-      std::shuffle(shuffled.begin(), shuffled.end(), rng_);
-      ++op_round_;
-      ++op_search_rounds_;
-      for (int i : shuffled) {
-        if (std::chrono::steady_clock::now() >= deadline_) break;
-        if (op_visit_[i] != op_round_ && !world.is_immovable(i)) rebuild(world, i, true);
-      }
-    }
-  }
+  first_pass(world, start);
+  if (deadline_ != std::chrono::steady_clock::time_point::max()) search_operations(world);
   for (int i : order_) {
     const OpPath& p = op_held_[i].path;
     next[i] = p.cell[1];

@@ -191,6 +191,8 @@ class PibtStep {
   void wait_in_place(const WorldView& world, int ai);
   OpResult build(const WorldView& world, int ai, bool search, double root, int depth, long& counter);
   void rebuild(const WorldView& world, int ai, bool search);
+  void first_pass(const WorldView& world, std::chrono::steady_clock::time_point start);
+  void search_operations(const WorldView& world);
   bool past_deadline(long& counter) const;
   bool stalled();
   bool over_operations(const WorldView& world);
