@@ -132,8 +132,8 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   EXPECT_EQ(guidance("paper", 2500, ActionModel::kMapf), "none");
   // Rule crowded-fleet: over 90% of the free cells dead ends wait 500 steps, and in the rotation
   // model PIBT plans over operations when the budget leaves room for their search (auto), with the
-  // swap after 20 steps standing; over cells (given) its
-  // configurations are carried out to the end and nobody swaps. Not below, not in the paper.
+  // swap after 20 steps standing; over cells (given) its configurations are carried out to the end
+  // and nobody swaps. Not below, not in the paper.
   auto crowded = [&](const std::string& preset, int agents, ActionModel model, const char* way = nullptr) {
     Params p;
     p.set("preset", preset);
