@@ -14,6 +14,15 @@ static double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+// The q-quantile of `values` (the value at rank q * n of the sorted values, as tools/bench_lorr.py
+// counts the Start-Kit's), 0 for none.
+static double percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0;
+  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * static_cast<double>(values.size())));
+  std::nth_element(values.begin(), values.begin() + static_cast<long>(k), values.end());
+  return values[k];
+}
+
 // Blocks of SimResult::kTimelineSteps steps that `steps` steps fill, the last one possibly short.
 static size_t blocks(int steps) {
   return steps > 0 ? (steps + SimResult::kTimelineSteps - 1) / SimResult::kTimelineSteps : 0;
@@ -47,6 +56,7 @@ nlohmann::json SimResult::to_json() const {
           {"plan_time_max_s", plan_time_max_s},
           {"step_wall_time_mean_s", step_wall_mean_s},
           {"step_wall_time_max_s", step_wall_max_s},
+          {"step_wall_time_p99_s", step_wall_p99_s},
           {"step_cpu_time_mean_s", step_cpu_mean_s},
           {"wall_time_s", wall_time_s},
           {"goals_timeline", {{"block_steps", kTimelineSteps}, {"goals", goals_timeline}}},
@@ -102,6 +112,7 @@ class Run {
     r_.throughput = steps > 0 ? double(r_.goals_reached) / steps : 0;
     r_.plan_time_mean_s = r_.planned_steps ? plan_sum_ / r_.planned_steps : 0;
     r_.step_wall_mean_s = steps > 0 ? wall_sum_ / steps : 0;
+    r_.step_wall_p99_s = percentile(walls_, 0.99);
     r_.step_cpu_mean_s = steps > 0 ? cpu_sum_ / steps : 0;
     for (int i = 0; i < n_; ++i) r_.late_at_end += late_[i];
     if (opt_.free_flow)
@@ -150,6 +161,7 @@ class Run {
     const double wall = seconds_since(t0);
     cpu_sum_ += process_cpu_s() - c0;
     wall_sum_ += wall;
+    walls_.push_back(wall);
     r_.step_wall_max_s = std::max(r_.step_wall_max_s, wall);
     if (rep.planned) {
       ++r_.planned_steps;
@@ -240,6 +252,7 @@ class Run {
   std::vector<uint8_t> late_, ever_late_;
   std::vector<ErrandSteps> leg_;  // per agent: the steps on its current goal so far
   double plan_sum_ = 0, wall_sum_ = 0, cpu_sum_ = 0;
+  std::vector<double> walls_;  // plan_step's wall time per step
 };
 
 }  // namespace

@@ -34,6 +34,7 @@ assert r["collisions"] == 0 and r["agents"] == 200 and r["steps"] == 100 and r["
 assert r["planner"] == "pibt" and r["params"]["agents"] == 200
 assert 0 < r["throughput"] <= r["free_flow_throughput"], r
 assert abs(r["throughput"] - r["goals_reached"] / 100) < 1e-9
+assert 0 < r["step_wall_time_p99_s"] <= r["step_wall_time_max_s"], r
 lines = open(sys.argv[2]).read().splitlines()
 assert len(lines) == 200 and lines[0].startswith("0:") and lines[0].count("(") == 101
 PY

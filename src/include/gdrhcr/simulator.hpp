@@ -51,6 +51,7 @@ struct SimResult {
   int planned_steps = 0;      // steps in which the planner ran a solver
   double plan_time_mean_s = 0, plan_time_max_s = 0;
   double step_wall_mean_s = 0, step_wall_max_s = 0;  // wall time of plan_step, every step
+  double step_wall_p99_s = 0;  // its 99th percentile (the least time 99% of the steps keep to)
   double step_cpu_mean_s = 0;  // process CPU time of plan_step (all threads), per step
   double wall_time_s = 0;
   // Progress: a goal is late once the agent has spent more than twice the shortest distance
