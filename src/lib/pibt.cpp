@@ -42,15 +42,8 @@ void PibtStep::update_priority(const WorldView& world, int i, Cell goal) {
   last_goal_[i] = goal;
 }
 
-// Whether agent k waits now to set out for the dead end that is its goal (dead_end_wait).
-bool PibtStep::waits_for_dead_end(const WorldView& world, int k) const {
-  return k < static_cast<int>(waited_for_.size()) && waited_for_[k] != kNoCell && !world.goals[k].empty() &&
-         world.goals[k][0] == waited_for_[k] && world.timestep < wait_until_[k];
-}
-
 // The goal PIBT moves agent i towards now: its own cell while it waits to set out for a dead end
-// (dead_end_wait), else its goal. An agent that begins to wait when dead_end_parked agents
-// already do sends the one that has waited longest on its way.
+// (dead_end_wait), else its goal.
 Cell PibtStep::goal_now(const WorldView& world, int i) {
   const Cell here = world.positions[i];
   const Cell g = world.goals[i].empty() ? here : world.goals[i][0];
@@ -59,17 +52,7 @@ Cell PibtStep::goal_now(const WorldView& world, int i) {
   if (nb.end() - nb.begin() > 1) return g;
   if (waited_for_.size() < priority_.size())
     waited_for_.resize(priority_.size(), kNoCell), wait_until_.resize(priority_.size(), 0);
-  if (waited_for_[i] != g) {
-    if (waiting_ >= opt_.dead_end_parked) {
-      int longest = -1;
-      for (int k = 0; k < static_cast<int>(waited_for_.size()); ++k)
-        if (k != i && waits_for_dead_end(world, k) && (longest < 0 || wait_until_[k] < wait_until_[longest]))
-          longest = k;
-      if (longest >= 0) wait_until_[longest] = world.timestep, --waiting_;
-    }
-    waited_for_[i] = g, wait_until_[i] = world.timestep + opt_.dead_end_wait;
-    if (world.timestep < wait_until_[i]) ++waiting_;
-  }
+  if (waited_for_[i] != g) waited_for_[i] = g, wait_until_[i] = world.timestep + opt_.dead_end_wait;
   return world.timestep < wait_until_[i] ? here : g;
 }
 
@@ -242,9 +225,6 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   } else {
     order_ = agents;
   }
-  waiting_ = 0;
-  if (opt_.dead_end_wait > 0)
-    for (int k = 0; k < static_cast<int>(waited_for_.size()); ++k) waiting_ += waits_for_dead_end(world, k);
   for (size_t k = 0; k < order_.size(); ++k) {
     const int i = order_[k];
     if (k + kNearAhead < order_.size())  // each agent's goal list is a cache miss of its own

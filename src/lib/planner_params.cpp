@@ -5,7 +5,6 @@
 #include "gdrhcr/planner_params.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
@@ -25,15 +24,10 @@ double MapFacts::cut_cell_share() const {
 // Fleets filling more than 90% of the free cells (rule crowded-fleet).
 constexpr double kCrowdedFleet = 0.9;
 bool crowded_fleet(const MapFacts& f) { return f.fleet_share() > kCrowdedFleet; }
-// The agents a fleet has beyond kCrowdedFleet of the free cells (at least 1).
-int agents_past_crowded(const MapFacts& f) {
-  return std::max(1, f.num_agents() - static_cast<int>(std::floor(kCrowdedFleet * static_cast<double>(f.free_cells()) + 1e-9)));
+
+double MapFacts::fleet_share() const {
+  return double(num_agents_) / std::max<size_t>(1, grid_->free_cells().size());
 }
-constexpr int kDeadEndWaitMax = 1000000;  // dead-end-wait and dead-end-parked: no bound
-
-double MapFacts::fleet_share() const { return double(num_agents_) / std::max<size_t>(1, free_cells()); }
-
-size_t MapFacts::free_cells() const { return grid_->free_cells().size(); }
 
 namespace {
 
@@ -56,9 +50,8 @@ std::string rule_thousands(const std::string& param, const MapFacts& f, const Pl
 std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerParams&) {
   return !thousands(f) && many_cut_cells(f) ? "8" : "0";
 }
-// Fleets filling more than 90% of the free cells: agents whose goal is a dead end wait before they
-// set out for it, as many at once as the fleet has agents beyond 90% of the free cells (the one
-// that waited longest sets out when one more begins); in the rotation model PIBT plans 3-action operations (EPIBT), with the swap after 20
+// Fleets filling more than 90% of the free cells: agents wait 500 steps before they set out for a
+// dead end; in the rotation model PIBT plans 3-action operations (EPIBT), with the swap after 20
 // steps standing. Over cells (given) no agent retreats to let another pass and PIBT's
 // configurations are carried out to the end, each the best of 16 runs.
 std::string rule_crowded(const std::string& param, const MapFacts& f, const PlannerParams& earlier) {
@@ -66,8 +59,7 @@ std::string rule_crowded(const std::string& param, const MapFacts& f, const Plan
   const bool rotation = f.model() == ActionModel::kRotation;
   if (param == "rotation-pibt") return crowded && rotation ? "auto" : "cells";
   if (param == "rotation-commit") return crowded && rotation ? "1" : "0";
-  if (param == "dead-end-wait") return crowded ? std::to_string(kDeadEndWaitMax) : "0";
-  if (param == "dead-end-parked") return crowded ? std::to_string(agents_past_crowded(f)) : std::to_string(kDeadEndWaitMax);
+  if (param == "dead-end-wait") return crowded ? "500" : "0";
   if (param == "rotation-starts") return crowded && rotation ? "16" : "1";
   return crowded && earlier.text("rotation-pibt") == "cells" ? "0" : "20";  // rotation-swap-wait
 }
@@ -117,9 +109,8 @@ const std::vector<ParamRule>& param_rules() {
        "none elsewhere or past 2,000 agents",
        std::string(kRulesFigure) + "motion-forecast", rule_forecast},
       {"crowded-fleet",
-       "fleets holding more than 90% of the free cells: agents whose goal is a dead end wait before they set out "
-       "for it (dead-end-wait 1000000), as many at once as the fleet has agents beyond 90% of the free cells, the one "
-       "that waited longest setting out when one more begins (dead-end-parked); in the rotation model PIBT plans over operations when the step budget leaves room for "
+       "fleets holding more than 90% of the free cells: agents wait 500 steps before they set out for a dead end "
+       "(dead-end-wait 500); in the rotation model PIBT plans over operations when the step budget leaves room for "
        "their search, else over cells (rotation-pibt auto; elsewhere cells), "
        "with the swap after 20 steps standing; over cells (given) no agent retreats for another (rotation-swap-wait 0) "
        "and PIBT's configurations are carried out to the end (rotation-commit 1), each the best of 16 runs "
@@ -208,14 +199,10 @@ std::vector<ParamSpec> pibt_rows() {
                   "rotation model, cells, without rotation-commit: extra cost, for an agent pushed by another, of "
                   "a cell it must turn towards (it stays, and so does its pusher)",
                   "", "0"),
-          integer("dead-end-wait", 0, kDeadEndWaitMax, "",
+          integer("dead-end-wait", 0, 1000000, "",
                   "steps an agent whose goal is a dead end (one free neighbour) waits where it stands before it sets "
                   "out for it (0 = never)",
                   "crowded-fleet", "0"),
-          integer("dead-end-parked", 0, kDeadEndWaitMax, "",
-                  "agents waiting for a dead end at once (dead-end-wait): when one more begins to wait, the one that "
-                  "has waited longest sets out",
-                  "crowded-fleet", std::to_string(kDeadEndWaitMax)),
           flag("priority-reset", "1", "reset an agent's priority when it reaches a goal"),
           choice("tie-break", {"free-first", "random"}, "free-first",
                  "order among equally near cells: an unoccupied one first, or random"),

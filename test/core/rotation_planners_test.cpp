@@ -575,39 +575,6 @@ TEST(RotationPlanners, AnAgentWaitsBeforeItSetsOutForADeadEnd) {
   EXPECT_EQ(to_open.back(), open);
 }
 
-TEST(RotationPlanners, TheAgentThatWaitedLongestForADeadEndSetsOutWhenOneMoreBegins) {
-  // Two dead ends off a corridor. With dead-end-parked 1, agent 0 waits for its dead end until
-  // agent 1 begins to wait for the other (step 5): then agent 0 sets out and gets there, and
-  // agent 1 stays. With room for two, both wait throughout.
-  const Grid g = Grid::from_rows({"@@@@@@@", "@.....@", "@.@@@.@", "@@@@@@@"});
-  const Cell a = g.cell(2, 1), b = g.cell(4, 1), dead_a = g.cell(1, 2), dead_b = g.cell(5, 2);
-  DistTable dist(g, ActionModel::kRotation);
-  auto run = [&](const char* parked, std::vector<Cell>& pos) {
-    Params p;
-    p.set("dead-end-wait", "1000");
-    p.set("dead-end-parked", parked);
-    auto planner = make_planner("pibt", p, g, 2, 1, ActionModel::kRotation);
-    StepValidator validator(g, ActionModel::kRotation);
-    pos = {a, b};
-    std::vector<Heading> heads = {kWest, kEast};
-    int a_arrived = -1;
-    for (int t = 0; t < 20; ++t) {
-      const std::vector<std::vector<Cell>> goals = {{dead_a}, {t < 5 ? b : dead_b}};
-      if (!rotation_step(*planner, g, dist, validator, t, goals, pos, heads)) return -2;
-      if (t < 5) EXPECT_EQ(pos[0], a) << "agent 0 moved at step " << t;
-      if (pos[0] == dead_a && a_arrived < 0) a_arrived = t;
-    }
-    return a_arrived;
-  };
-  std::vector<Cell> pos;
-  EXPECT_GE(run("1", pos), 5);
-  EXPECT_EQ(pos[0], dead_a);
-  EXPECT_EQ(pos[1], b);
-  EXPECT_EQ(run("2", pos), -1);
-  EXPECT_EQ(pos[0], a);
-  EXPECT_EQ(pos[1], b);
-}
-
 TEST(RotationPlanners, CrowdedFleetsStayValidWithEitherWayOfPibt) {
   // The crowded-fleet rule's configuration on a map past 90% full (auto with a step budget,
   // operations and cells changing ways; the swap, dead-end-wait), over operations (given) and over

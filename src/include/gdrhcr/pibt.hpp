@@ -109,10 +109,6 @@ struct PibtOptions {
   // occupants of a dead end can leave only through the cell the newcomer queues in (after WPPL,
   // which parks such agents for good; here the goal is only deferred).
   int dead_end_wait = 0;
-  // At most this many agents wait for a dead end at once: when one more begins to wait, the one
-  // that has waited longest sets out. So however long the wait and the run, the waiting agents
-  // stay a bounded part of the fleet, and each goal is deferred only until others take its place.
-  int dead_end_parked = 1000000;
 };
 
 // PIBT as published (the paper configuration and RHCR's fallback): no swap.
@@ -242,7 +238,6 @@ class PibtStep {
   bool can_swap(Cell pusher_at, Cell puller_at) const;
   int passable_neighbours(Cell at, Cell except, Cell* other) const;
   void update_priority(const WorldView& world, int i, Cell goal);
-  bool waits_for_dead_end(const WorldView& world, int k) const;
   Cell goal_now(const WorldView& world, int i);
   const std::vector<Cell>* with_kept_cells(const WorldView& world, const std::vector<Cell>* preferred);
   void keep_unreached_cells(const WorldView& world, const std::vector<Cell>& next);
@@ -280,7 +275,6 @@ class PibtStep {
   int target_steps_ = 0;            // steps spent on it so far (0: none)
   std::vector<Cell> waited_for_;    // dead_end_wait: the goal each agent's wait is for
   std::vector<int> wait_until_;     // ... and the timestep it ends
-  int waiting_ = 0;                 // agents waiting for a dead end in this call (dead_end_parked)
   const std::vector<Cell>* preferred_ = nullptr;
   const std::vector<uint8_t>* immovable_ = nullptr;
   std::vector<int> order_;
