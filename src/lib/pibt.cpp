@@ -43,7 +43,7 @@ void PibtStep::update_priority(const WorldView& world, int i, Cell goal) {
 }
 
 // The goal PIBT moves agent i towards now: its own cell while it waits to set out for a dead end
-// (dead_end_wait), else its goal.
+// (dead_end_wait, dead_end_parked), else its goal.
 Cell PibtStep::goal_now(const WorldView& world, int i) {
   const Cell here = world.positions[i];
   const Cell g = world.goals[i].empty() ? here : world.goals[i][0];
@@ -51,9 +51,27 @@ Cell PibtStep::goal_now(const WorldView& world, int i) {
   const auto nb = grid_.neighbours(g);
   if (nb.end() - nb.begin() > 1) return g;
   if (waited_for_.size() < priority_.size())
-    waited_for_.resize(priority_.size(), kNoCell), wait_until_.resize(priority_.size(), 0);
-  if (waited_for_[i] != g) waited_for_[i] = g, wait_until_[i] = world.timestep + opt_.dead_end_wait;
-  return world.timestep < wait_until_[i] ? here : g;
+    waited_for_.resize(priority_.size(), kNoCell), wait_until_.resize(priority_.size(), 0),
+        set_out_.resize(priority_.size(), 0);
+  if (waited_for_[i] != g) waited_for_[i] = g, wait_until_[i] = world.timestep + opt_.dead_end_wait, set_out_[i] = 0;
+  const bool waits = world.timestep < wait_until_[i] || (opt_.dead_end_parked > 0 && !set_out_[i]);
+  return waits ? here : g;
+}
+
+// dead_end_parked: while more agents wait for a dead end than it allows, those past their
+// dead_end_wait set out, the one that has waited longest first.
+void PibtStep::end_dead_end_waits(const WorldView& world) {
+  if (opt_.dead_end_wait <= 0 || opt_.dead_end_parked <= 0) return;
+  int waiting = 0;
+  std::vector<std::pair<int, int>> past;  // (end of the wait, agent)
+  for (int k = 0; k < static_cast<int>(waited_for_.size()); ++k) {
+    if (set_out_[k] || waited_for_[k] == kNoCell || world.goals[k].empty() || world.goals[k][0] != waited_for_[k])
+      continue;
+    ++waiting;
+    if (world.timestep >= wait_until_[k]) past.emplace_back(wait_until_[k], k);
+  }
+  std::sort(past.begin(), past.end());
+  for (size_t j = 0; j < past.size() && waiting > opt_.dead_end_parked; ++j, --waiting) set_out_[past[j].second] = 1;
 }
 
 // rotation_commit: while the configuration chosen earlier is not reached (and for at most three
@@ -225,6 +243,7 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   } else {
     order_ = agents;
   }
+  end_dead_end_waits(world);
   for (size_t k = 0; k < order_.size(); ++k) {
     const int i = order_[k];
     if (k + kNearAhead < order_.size())  // each agent's goal list is a cache miss of its own

@@ -5,6 +5,7 @@
 #include "gdrhcr/planner_params.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
@@ -25,9 +26,15 @@ double MapFacts::cut_cell_share() const {
 constexpr double kCrowdedFleet = 0.9;
 bool crowded_fleet(const MapFacts& f) { return f.fleet_share() > kCrowdedFleet; }
 
-double MapFacts::fleet_share() const {
-  return double(num_agents_) / std::max<size_t>(1, grid_->free_cells().size());
+// The agents a fleet has beyond kCrowdedFleet of the free cells (at least 1).
+static int agents_past_crowded(const MapFacts& f) {
+  const double crowd = kCrowdedFleet * static_cast<double>(f.free_cells());
+  return std::max(1, f.num_agents() - static_cast<int>(std::floor(crowd + 1e-9)));
 }
+
+double MapFacts::fleet_share() const { return double(num_agents_) / std::max<size_t>(1, free_cells()); }
+
+size_t MapFacts::free_cells() const { return grid_->free_cells().size(); }
 
 namespace {
 
@@ -51,7 +58,7 @@ std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerPa
   return !thousands(f) && many_cut_cells(f) ? "8" : "0";
 }
 // Fleets filling more than 90% of the free cells: agents wait 500 steps before they set out for a
-// dead end; in the rotation model PIBT plans 3-action operations (EPIBT), with the swap after 20
+// dead end, and longer while no more wait than the fleet has agents beyond 90% of the free cells; in the rotation model PIBT plans 3-action operations (EPIBT), with the swap after 20
 // steps standing. Over cells (given) no agent retreats to let another pass and PIBT's
 // configurations are carried out to the end, each the best of 16 runs.
 std::string rule_crowded(const std::string& param, const MapFacts& f, const PlannerParams& earlier) {
@@ -60,6 +67,7 @@ std::string rule_crowded(const std::string& param, const MapFacts& f, const Plan
   if (param == "rotation-pibt") return crowded && rotation ? "auto" : "cells";
   if (param == "rotation-commit") return crowded && rotation ? "1" : "0";
   if (param == "dead-end-wait") return crowded ? "500" : "0";
+  if (param == "dead-end-parked") return crowded ? std::to_string(agents_past_crowded(f)) : "0";
   if (param == "rotation-starts") return crowded && rotation ? "16" : "1";
   return crowded && earlier.text("rotation-pibt") == "cells" ? "0" : "20";  // rotation-swap-wait
 }
@@ -110,7 +118,8 @@ const std::vector<ParamRule>& param_rules() {
        std::string(kRulesFigure) + "motion-forecast", rule_forecast},
       {"crowded-fleet",
        "fleets holding more than 90% of the free cells: agents wait 500 steps before they set out for a dead end "
-       "(dead-end-wait 500); in the rotation model PIBT plans over operations when the step budget leaves room for "
+       "(dead-end-wait 500), and longer while no more wait than the fleet has agents beyond 90% of the free cells "
+       "(dead-end-parked); in the rotation model PIBT plans over operations when the step budget leaves room for "
        "their search, else over cells (rotation-pibt auto; elsewhere cells), "
        "with the swap after 20 steps standing; over cells (given) no agent retreats for another (rotation-swap-wait 0) "
        "and PIBT's configurations are carried out to the end (rotation-commit 1), each the best of 16 runs "
@@ -202,6 +211,10 @@ std::vector<ParamSpec> pibt_rows() {
           integer("dead-end-wait", 0, 1000000, "",
                   "steps an agent whose goal is a dead end (one free neighbour) waits where it stands before it sets "
                   "out for it (0 = never)",
+                  "crowded-fleet", "0"),
+          integer("dead-end-parked", 0, 1000000, "",
+                  "agents past their dead-end-wait keep waiting while no more than this many wait in all; beyond "
+                  "it those past their wait set out, the longest-waiting first (0 = each when its wait ends)",
                   "crowded-fleet", "0"),
           flag("priority-reset", "1", "reset an agent's priority when it reaches a goal"),
           choice("tie-break", {"free-first", "random"}, "free-first",

@@ -30,6 +30,7 @@ PibtOptions pibt_options(const PlannerParams& v) {
   o.rotation_keep = v.flag("rotation-keep");
   o.rotation_push_turn_cost = v.integer("rotation-push-turn-cost");
   o.dead_end_wait = v.integer("dead-end-wait");
+  o.dead_end_parked = v.integer("dead-end-parked");
   return o;
 }
 

@@ -575,6 +575,45 @@ TEST(RotationPlanners, AnAgentWaitsBeforeItSetsOutForADeadEnd) {
   EXPECT_EQ(to_open.back(), open);
 }
 
+TEST(RotationPlanners, AgentsPastTheirDeadEndWaitKeepWaitingWhileFewWait) {
+  // Two dead ends off a corridor; dead-end-wait 3. Agent 0 begins to wait at step 0, agent 1 (its
+  // goal changed to the other dead end) at step 6. With dead-end-parked 0, agent 0 sets out when its
+  // wait ends. With 1 it keeps waiting past its wait while it is the only one, and sets out once
+  // agent 1 waits too (2 > 1); agent 1 then waits its 3 steps and, alone again, stays. With 2 both
+  // stay throughout.
+  const Grid g = Grid::from_rows({"@@@@@@@", "@.....@", "@.@@@.@", "@@@@@@@"});
+  const Cell a = g.cell(2, 1), b = g.cell(4, 1), dead_a = g.cell(1, 2), dead_b = g.cell(5, 2);
+  DistTable dist(g, ActionModel::kRotation);
+  auto run = [&](const char* parked, std::vector<Cell>& pos) {
+    Params p;
+    p.set("dead-end-wait", "3");
+    p.set("dead-end-parked", parked);
+    auto planner = make_planner("pibt", p, g, 2, 1, ActionModel::kRotation);
+    StepValidator validator(g, ActionModel::kRotation);
+    pos = {a, b};
+    std::vector<Heading> heads = {kWest, kEast};
+    int a_left = -1;
+    for (int t = 0; t < 20; ++t) {
+      const std::vector<std::vector<Cell>> goals = {{dead_a}, {t < 6 ? b : dead_b}};
+      if (!rotation_step(*planner, g, dist, validator, t, goals, pos, heads)) return -2;
+      if (pos[0] != a && a_left < 0) a_left = t;
+    }
+    return a_left;
+  };
+  std::vector<Cell> pos;
+  const int left_alone = run("0", pos);
+  EXPECT_GE(left_alone, 3);
+  EXPECT_LT(left_alone, 6);
+  EXPECT_EQ(pos[0], dead_a);
+  EXPECT_EQ(pos[1], dead_b);
+  EXPECT_GE(run("1", pos), 6);
+  EXPECT_EQ(pos[0], dead_a);
+  EXPECT_EQ(pos[1], b);
+  EXPECT_EQ(run("2", pos), -1);
+  EXPECT_EQ(pos[0], a);
+  EXPECT_EQ(pos[1], b);
+}
+
 TEST(RotationPlanners, CrowdedFleetsStayValidWithEitherWayOfPibt) {
   // The crowded-fleet rule's configuration on a map past 90% full (auto with a step budget,
   // operations and cells changing ways; the swap, dead-end-wait), over operations (given) and over

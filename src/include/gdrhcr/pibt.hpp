@@ -109,6 +109,11 @@ struct PibtOptions {
   // occupants of a dead end can leave only through the cell the newcomer queues in (after WPPL,
   // which parks such agents for good; here the goal is only deferred).
   int dead_end_wait = 0;
+  // Agents past their dead_end_wait keep waiting while no more than this many wait in all; beyond
+  // it, those past their wait set out, the one that has waited longest first (0: each sets out when
+  // its wait ends). A packed crowd keeps a few goals deferred at any time, and each waiting agent
+  // still sets out once enough others begin to wait after it.
+  int dead_end_parked = 0;
 };
 
 // PIBT as published (the paper configuration and RHCR's fallback): no swap.
@@ -239,6 +244,7 @@ class PibtStep {
   int passable_neighbours(Cell at, Cell except, Cell* other) const;
   void update_priority(const WorldView& world, int i, Cell goal);
   Cell goal_now(const WorldView& world, int i);
+  void end_dead_end_waits(const WorldView& world);
   const std::vector<Cell>* with_kept_cells(const WorldView& world, const std::vector<Cell>* preferred);
   void keep_unreached_cells(const WorldView& world, const std::vector<Cell>& next);
   bool carry_on(const WorldView& world, std::vector<Cell>& next,
@@ -275,6 +281,7 @@ class PibtStep {
   int target_steps_ = 0;            // steps spent on it so far (0: none)
   std::vector<Cell> waited_for_;    // dead_end_wait: the goal each agent's wait is for
   std::vector<int> wait_until_;     // ... and the timestep it ends
+  std::vector<uint8_t> set_out_;    // ... and whether it has set out (dead_end_parked)
   const std::vector<Cell>* preferred_ = nullptr;
   const std::vector<uint8_t>* immovable_ = nullptr;
   std::vector<int> order_;

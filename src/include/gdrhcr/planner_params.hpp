@@ -43,6 +43,7 @@ class MapFacts {
   ActionModel model() const { return model_; }
   double cut_cell_share() const;  // computed once, on first use
   double fleet_share() const;     // agents per free cell
+  size_t free_cells() const;
  private:
   const Grid* grid_;
   int num_agents_;
