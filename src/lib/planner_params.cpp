@@ -26,12 +26,6 @@ double MapFacts::cut_cell_share() const {
 constexpr double kCrowdedFleet = 0.9;
 bool crowded_fleet(const MapFacts& f) { return f.fleet_share() > kCrowdedFleet; }
 
-// The agents a fleet has beyond kCrowdedFleet of the free cells (at least 1).
-static int agents_past_crowded(const MapFacts& f) {
-  const double crowd = kCrowdedFleet * static_cast<double>(f.free_cells());
-  return std::max(1, f.num_agents() - static_cast<int>(std::floor(crowd + 1e-9)));
-}
-
 double MapFacts::fleet_share() const { return double(num_agents_) / std::max<size_t>(1, free_cells()); }
 
 size_t MapFacts::free_cells() const { return grid_->free_cells().size(); }
@@ -44,6 +38,11 @@ constexpr int kThousands = 2000;  // fleets past this many agents plan guidance 
 bool thousands(const MapFacts& f) { return f.num_agents() > kThousands; }
 // Maps where at least 1% of the free cells are cut cells (dead ends, one-lane passages).
 bool many_cut_cells(const MapFacts& f) { return f.cut_cell_share() >= 0.01; }
+// The agents a fleet has beyond kCrowdedFleet of the free cells (at least 1).
+int agents_past_crowded(const MapFacts& f) {
+  const double crowd = kCrowdedFleet * static_cast<double>(f.free_cells());
+  return std::max(1, f.num_agents() - static_cast<int>(std::floor(crowd + 1e-9)));
+}
 
 std::string rule_k_threshold(const std::string&, const MapFacts& f, const PlannerParams&) {
   return std::to_string(std::max(2, std::min(f.num_agents() / 10, 20)));
@@ -58,8 +57,9 @@ std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerPa
   return !thousands(f) && many_cut_cells(f) ? "8" : "0";
 }
 // Fleets filling more than 90% of the free cells: agents wait 500 steps before they set out for a
-// dead end, and longer while no more wait than the fleet has agents beyond 90% of the free cells; in the rotation model PIBT plans 3-action operations (EPIBT), with the swap after 20
-// steps standing. Over cells (given) no agent retreats to let another pass and PIBT's
+// dead end, and longer while no more wait than the fleet has agents beyond 90% of the free cells;
+// in the rotation model PIBT plans 3-action operations (EPIBT), with the swap after 20 steps
+// standing. Over cells (given) no agent retreats to let another pass and PIBT's
 // configurations are carried out to the end, each the best of 16 runs.
 std::string rule_crowded(const std::string& param, const MapFacts& f, const PlannerParams& earlier) {
   const bool crowded = crowded_fleet(f);
