@@ -636,6 +636,7 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"secondary_starts", pibt_.starts()},
           {"secondary_starts_won", pibt_.starts_won()},
           {"secondary_search_rounds", pibt_.search_rounds()},
+          {"secondary_search_zoned_rounds", pibt_.zoned_rounds()},
           {"secondary_stalls", pibt_.stalls()},
           {"secondary_operation_calls", pibt_.operation_calls()},
           {"guidance_cut_short", guidance_ ? guidance_->cut_short() : 0},

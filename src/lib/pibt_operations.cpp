@@ -5,6 +5,8 @@
 #include <chrono>
 #include <climits>
 #include <numeric>
+#include <system_error>
+#include <thread>
 
 #include "gdrhcr/pibt.hpp"
 
@@ -55,17 +57,17 @@ const std::vector<int>& operation_codes() {
 int carried_code(int code) { return code / 4 + 3 * (kCodes / 4); }
 }  // namespace
 
-void PibtStep::reserve(int ai) {
-  const OpPath& p = op_held_[ai].path;
+void PibtStep::reserve(int ai, double& score) {
+  const OpPath& p = op_[ai].held.path;
   for (int k = 1; k <= kOpSteps; ++k) res(k, p.cell[k]) = ai;
-  op_score_ += op_power_[ai] * (op_wait_cost_[ai] - op_held_[ai].cost);
+  score += op_power_[ai] * (op_wait_cost_[ai] - op_[ai].held.cost);
 }
 
-void PibtStep::release(int ai) {
-  const OpPath& p = op_held_[ai].path;
+void PibtStep::release(int ai, double& score) {
+  const OpPath& p = op_[ai].held.path;
   for (int k = 1; k <= kOpSteps; ++k)
     if (res(k, p.cell[k]) == ai) res(k, p.cell[k]) = kFree;
-  op_score_ -= op_power_[ai] * (op_wait_cost_[ai] - op_held_[ai].cost);
+  score -= op_power_[ai] * (op_wait_cost_[ai] - op_[ai].held.cost);
 }
 
 // The one agent whose reserved cells (or a move crossing one of p's) operation p of ai meets:
@@ -185,94 +187,106 @@ bool PibtStep::past_deadline(long& counter) const {
          std::chrono::steady_clock::now() >= deadline_;
 }
 
+// Whether p lies in zone z: only such operations are taken, and only agents holding one displaced,
+// so two zones at least kOpSteps + 1 apart never touch the same cell or agent.
+bool PibtStep::zone_holds(const OpZone& z, const OpPath& p) const {
+  if (z.id == 0) return true;
+  for (int k = 0; k <= kOpSteps; ++k)
+    if (op_zone_[p.cell[k]] != z.id) return false;
+  return true;
+}
+
 // EPIBT's build: ai (its path released by the caller) takes its best operation that is free, or
-// that displaces one agent which can in turn be built around it (recursively). In the first pass
-// only agents of lower priority than the root (`root`, its op_key_) may be displaced; in the
-// search anyone may, and the result stands only if the fleet's score did not fall. Every
-// agent holds a valid operation throughout: a failed attempt restores what it changed.
+// that displaces one agent of lower priority than the root (`root`, its op_key_) which can in turn
+// be built around it (recursively), all within zone z. In the search the result stands only if
+// the fleet's score (z.score, its change in the zone) did not fall. Every agent holds a valid
+// operation throughout: a failed attempt restores what it changed.
 PibtStep::OpResult PibtStep::build(const WorldView& world, int ai, bool search, double root, int depth,
-                                   long& counter) {
+                                   long& counter, OpZone& z) {
   if (past_deadline(counter)) return OpResult::kRejected;
-  if (op_visit_[ai] != op_round_) op_visit_[ai] = op_round_, op_visits_[ai] = 0;
-  ++op_visits_[ai];
-  op_on_stack_[ai] = 1;
-  const OpChoice old = op_held_[ai];
+  if (op_[ai].visit != z.round) op_[ai].visit = z.round, op_[ai].visits = 0;
+  ++op_[ai].visits;
+  op_[ai].on_stack = 1;
+  const OpChoice old = op_[ai].held;
   const OpChoice* cand = &op_cand_[size_t(ai) * kMaxOps];
   for (int c = 0; c < op_cand_n_[ai]; ++c) {
+    if (!zone_holds(z, cand[c].path)) continue;
     const int u = blocker(ai, cand[c].path);
     if (u == kBlocked) continue;
     if (u == kFree) {
-      op_held_[ai] = cand[c];
-      reserve(ai);
-      if (search && op_score_ < op_score_before_ - 1e-9) {
-        release(ai);
-        op_held_[ai] = old;
-        op_on_stack_[ai] = 0;
+      op_[ai].held = cand[c];
+      reserve(ai, z.score);
+      if (search && z.score < z.before - 1e-9) {
+        release(ai, z.score);
+        op_[ai].held = old;
+        op_[ai].on_stack = 0;
         return OpResult::kRejected;
       }
-      op_on_stack_[ai] = 0;
+      op_[ai].on_stack = 0;
       return OpResult::kAccepted;
     }
-    if (depth >= kOpDepth || op_on_stack_[u] || world.is_immovable(u) ||
-        (op_visit_[u] == op_round_ && op_visits_[u] >= kOpVisits) || op_key_[u] >= root)
+    if (depth >= kOpDepth || op_[u].on_stack || world.is_immovable(u) ||
+        (op_[u].visit == z.round && op_[u].visits >= kOpVisits) || op_key_[u] >= root ||
+        !zone_holds(z, op_[u].held.path))
       continue;
-    release(u);
-    op_held_[ai] = cand[c];
-    reserve(ai);
+    release(u, z.score);
+    op_[ai].held = cand[c];
+    reserve(ai, z.score);
     ++counter;
-    const OpResult r = build(world, u, search, root, depth + 1, counter);
+    const OpResult r = build(world, u, search, root, depth + 1, counter, z);
     if (r == OpResult::kAccepted) {
-      op_on_stack_[ai] = 0;
+      op_[ai].on_stack = 0;
       return r;
     }
-    release(ai);
-    reserve(u);  // u's failed build left it holding its own operation
-    op_held_[ai] = old;
+    release(ai, z.score);
+    reserve(u, z.score);  // u's failed build left it holding its own operation
+    op_[ai].held = old;
     if (r == OpResult::kRejected) {
-      op_on_stack_[ai] = 0;
+      op_[ai].on_stack = 0;
       return r;
     }
   }
-  op_on_stack_[ai] = 0;
+  op_[ai].on_stack = 0;
   return OpResult::kFailed;
 }
 
-void PibtStep::rebuild(const WorldView& world, int ai, bool search) {
+void PibtStep::rebuild(const WorldView& world, int ai, bool search, OpZone& z) {
   long counter = 0;
-  op_score_before_ = op_score_;
-  release(ai);
-  if (build(world, ai, search, op_key_[ai], 0, counter) != OpResult::kAccepted) reserve(ai);
+  z.before = z.score;
+  release(ai, z.score);
+  if (build(world, ai, search, op_key_[ai], 0, counter, z) != OpResult::kAccepted) reserve(ai, z.score);
 }
 
 // Agent ai's operation at the start of the call: the one it chose at the last step, carried on,
 // when it made that operation's first action; else wait, wait, wait.
 void PibtStep::start_operation(const WorldView& world, int ai) {
   const Pose p = world.pose(ai);
-  const OpChoice& last = op_held_[ai];
+  const OpChoice& last = op_[ai].held;
   const bool carried = op_held_t_[ai] == world.timestep - 1 && last.path.cell[1] == p.cell &&
                        last.path.heading[1] == p.heading && !world.is_immovable(ai);
-  op_held_[ai] = listed(ai, carried ? carried_code(last.code) : kWww);
+  op_[ai].held = listed(ai, carried ? carried_code(last.code) : kWww);
 }
 
 // Agent ai and, recursively, every agent whose reserved cells meet its own, fall back to waiting.
 void PibtStep::wait_in_place(const WorldView& world, int ai) {
   const OpChoice& c = listed(ai, kWww);
-  op_held_[ai] = c;
+  op_[ai].held = c;
   for (int k = 1; k <= kOpSteps; ++k) {
     const int v = res(k, c.path.cell[k]);
     if (v >= 0 && v != ai) {
-      release(v);
+      release(v, op_score_);
       wait_in_place(world, v);
     }
   }
-  reserve(ai);
+  reserve(ai, op_score_);
 }
 
 // The first pass: the agents built in priority order until the deadline, the rest keeping the
 // operation they hold. Its time since `start` (kAuto), scaled up to the whole call when the
 // deadline cut it short, is smoothed over the calls (one slow step should not change the way).
 void PibtStep::first_pass(const WorldView& world, std::chrono::steady_clock::time_point start) {
-  ++op_round_;
+  OpZone map;
+  map.round = ++op_round_;
   size_t reached = 0;  // agents of the priority order the first pass got to
   for (int i : order_) {
     if (std::chrono::steady_clock::now() >= deadline_) {  // the rest keep the operation they hold
@@ -280,26 +294,75 @@ void PibtStep::first_pass(const WorldView& world, std::chrono::steady_clock::tim
       break;
     }
     ++reached;
-    if (op_visit_[i] != op_round_ && !world.is_immovable(i)) rebuild(world, i, false);
+    if (op_[i].visit != op_round_ && !world.is_immovable(i)) rebuild(world, i, false, map);
   }
+  op_score_ += map.score;
   const double pass = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double whole = pass * static_cast<double>(order_.size()) / static_cast<double>(std::max<size_t>(reached, 1));
   op_pass_s_ = op_pass_s_ > 0 ? op_pass_s_ + kOpPassWeight * (whole - op_pass_s_) : whole;
 }
 
+// One round of the search in zone z: its agents rebuilt in random order, each change kept when
+// the fleet's score does not fall.
+void PibtStep::search_round(const WorldView& world, OpZone& z) {
+  std::shuffle(z.agents.begin(), z.agents.end(), z.rng);
+  for (int i : z.agents) {
+    if (std::chrono::steady_clock::now() >= deadline_) break;
+    if (op_[i].visit != z.round && !world.is_immovable(i) && zone_holds(z, op_[i].held.path))
+      rebuild(world, i, true, z);
+  }
+}
+
+// A round in two zones at once: the map cut across `axis` (0: x, 1: y) at the agents' median, the
+// kOpSteps cells around the cut in neither zone, so that no operation lies in both and each zone's
+// thread touches only its own cells and agents. The agents whose operation meets the cut wait for
+// a round across the other axis.
+void PibtStep::search_zones(const WorldView& world, int axis) {
+  if (order_.empty()) return;
+  auto along = [&](Cell c) { return axis == 0 ? grid_.x_of(c) : grid_.y_of(c); };
+  std::vector<int> at;
+  at.reserve(order_.size());
+  for (int i : order_) at.push_back(along(world.positions[i]));
+  std::nth_element(at.begin(), at.begin() + at.size() / 2, at.end());
+  const int below = at[at.size() / 2] - 1 - kOpSteps / 2, above = below + kOpSteps + 1;
+  op_zone_.resize(grid_.num_cells());
+  for (Cell c = 0; c < grid_.num_cells(); ++c) op_zone_[c] = along(c) <= below ? 1 : along(c) >= above ? 2 : 0;
+  OpZone zones[2];
+  for (int k = 0; k < 2; ++k) zones[k].id = k + 1, zones[k].round = ++op_round_, zones[k].rng.seed(rng_());
+  for (int i : order_)
+    for (OpZone& z : zones)
+      if (zone_holds(z, op_[i].held.path)) z.agents.push_back(i);
+  ++op_zoned_rounds_;
+  std::thread other;
+  try {
+    other = std::thread([&] { search_round(world, zones[1]); });
+  } catch (const std::system_error&) {  // no thread to be had: both zones here
+  }
+  search_round(world, zones[0]);
+  if (other.joinable()) other.join();
+  else search_round(world, zones[1]);
+  op_score_ += zones[0].score + zones[1].score;
+}
+
 // EPIBT's LNS until the deadline: agents rebuilt in random order, each change kept when the
-// fleet's score does not fall, until a round gains nothing.
+// fleet's score does not fall, until a round gains nothing. With search_threads, rounds run in two
+// zones at once, across x and y in turn, until two rounds in a row gain nothing.
 void PibtStep::search_operations(const WorldView& world) {
-  std::vector<int> shuffled(order_);
-  for (double before = -1; op_score_ > before + 1e-9 && std::chrono::steady_clock::now() < deadline_;) {
-    before = op_score_;
-    std::shuffle(shuffled.begin(), shuffled.end(), rng_);
-    ++op_round_;
+  const bool zoned = opt_.search_threads > 1;
+  OpZone whole;
+  whole.agents = order_;
+  if (!zoned) whole.rng.seed(rng_());
+  for (int idle = 0, round = 0; idle < (zoned ? 2 : 1) && std::chrono::steady_clock::now() < deadline_; ++round) {
+    const double before = op_score_;
     ++op_search_rounds_;
-    for (int i : shuffled) {
-      if (std::chrono::steady_clock::now() >= deadline_) break;
-      if (op_visit_[i] != op_round_ && !world.is_immovable(i)) rebuild(world, i, true);
+    if (zoned) {
+      search_zones(world, round % 2);
+    } else {
+      whole.round = ++op_round_, whole.score = 0;
+      search_round(world, whole);
+      op_score_ += whole.score;
     }
+    idle = op_score_ > before + 1e-9 ? 0 : idle + 1;
   }
 }
 
@@ -313,10 +376,9 @@ void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
   const auto start = std::chrono::steady_clock::now();
   const int n = world.num_agents();
   res_.resize(size_t(kOpSteps) * grid_.num_cells(), kFree);
-  if (static_cast<int>(op_held_.size()) < n) {
-    op_held_.resize(n), op_held_t_.resize(n, INT_MIN), op_wait_cost_.resize(n), op_power_.resize(n);
+  if (static_cast<int>(op_.size()) < n) {
+    op_.resize(n), op_held_t_.resize(n, INT_MIN), op_wait_cost_.resize(n), op_power_.resize(n);
     op_key_.resize(n), op_cand_.resize(size_t(n) * kMaxOps), op_cand_n_.resize(n);
-    op_visit_.resize(n, 0), op_visits_.resize(n, 0), op_on_stack_.resize(n, 0);
   }
   auto fix = [&](Cell c, int from_k) {
     for (int k = from_k; c != kNoCell && k <= kOpSteps; ++k) res(k, c) = kFixed;
@@ -346,13 +408,13 @@ void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
   op_score_ = 0;
   for (int i : order_) {
     start_operation(world, i);
-    if (blocker(i, op_held_[i].path) != kFree) wait_in_place(world, i);
-    else reserve(i);
+    if (blocker(i, op_[i].held.path) != kFree) wait_in_place(world, i);
+    else reserve(i, op_score_);
   }
   first_pass(world, start);
   if (deadline_ != std::chrono::steady_clock::time_point::max()) search_operations(world);
   for (int i : order_) {
-    const OpPath& p = op_held_[i].path;
+    const OpPath& p = op_[i].held.path;
     next[i] = p.cell[1];
     (*world.next_headings)[i] = p.heading[1];
     op_held_t_[i] = world.timestep;  // the next step carries it on (start_operation)

@@ -290,7 +290,7 @@ std::vector<ParamSpec> gd_rhcr_table() {
       real("step-budget", 0, 1e6, "0",
            "seconds per step (0 = none): solves get 60%, guidance refinement stops at 50%, guidance at 85%, PIBT at 95% (the agents it has not reached step ahead or wait)"),
       integer("node-budget", 0, 2000000000, "0", "PBS node limit per solve, deterministic (0 = none)"),
-      integer("threads", 1, 1024, "1", "thread pool for the groups replanned in one step, and zones of the windowed LNS searched at once"),
+      integer("threads", 1, 1024, "1", "thread pool for the groups replanned in one step, zones of the windowed LNS searched at once, and halves of the map PIBT's search over operations improves at once"),
       choice("solver", {"pbs", "pibt"}, "pbs", "the primary solver"),
       real("max-density", 0, 1, "0.02",
            "groups with more than this share of the free cells around them occupied go to the secondary solver", "",

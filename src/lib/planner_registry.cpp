@@ -123,6 +123,7 @@ GdRhcrConfig gd_rhcr_config(const PlannerParams& v, uint64_t seed) {
   c.max_density = v.real("max-density");
   c.density_margin = v.integer("density-margin");
   c.pibt = pibt_options(v);
+  c.pibt.search_threads = c.threads;
   c.guidance = v.text("guidance") == "local";
   c.forecast = forecast_config(v);
   c.lg = guidance_config(v, seed);

@@ -340,7 +340,8 @@ TEST(RotationPlanners, OperationsStalledForLongArePlannedOverCells) {
 TEST(RotationPlanners, OperationsSearchTheRestOfTheBudgetAndStayValid) {
   // A crowded fleet (90% of random-32-32-20's free cells) under GD-RHCR with PIBT over
   // operations and a budget: after the first pass the search (EPIBT's LNS) runs until a round
-  // gains nothing, every step stays valid, and the fleet reaches goals.
+  // gains nothing, every step stays valid, and the fleet reaches goals. With two threads the
+  // rounds run in two zones at once (search_zones): as valid, and only then zoned.
   const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
   DistTable dist(g, ActionModel::kRotation);
   const int n = 740;
@@ -348,15 +349,20 @@ TEST(RotationPlanners, OperationsSearchTheRestOfTheBudgetAndStayValid) {
   SimOptions opt;
   opt.steps = 10;
   opt.action_model = ActionModel::kRotation;
-  Params p;
-  p.set("rotation-pibt", "operations");
-  p.set("step-budget", "0.5");  // the first pass fits many times over, even under a sanitizer
-  auto planner = make_planner("gd-rhcr", p, g, n, 4, ActionModel::kRotation);
-  RandomNavigationStream tasks(g, 4);
-  const SimResult r = run_simulation(g, dist, tasks, *planner, starts, opt);
-  EXPECT_EQ(r.collisions, 0);
-  EXPECT_GT(r.goals_reached, 0);
-  EXPECT_GT(planner->stats()["secondary_search_rounds"].get<long>(), 0);
+  for (const char* threads : {"1", "2"}) {
+    Params p;
+    p.set("rotation-pibt", "operations");
+    p.set("step-budget", "0.5");  // the first pass fits many times over, even under a sanitizer
+    p.set("threads", threads);
+    auto planner = make_planner("gd-rhcr", p, g, n, 4, ActionModel::kRotation);
+    RandomNavigationStream tasks(g, 4);
+    const SimResult r = run_simulation(g, dist, tasks, *planner, starts, opt);
+    EXPECT_EQ(r.collisions, 0) << threads << " threads";
+    EXPECT_GT(r.goals_reached, 0) << threads << " threads";
+    const auto stats = planner->stats();
+    EXPECT_GT(stats["secondary_search_rounds"].get<long>(), 0) << threads << " threads";
+    EXPECT_EQ(stats["secondary_search_zoned_rounds"].get<long>() > 0, std::string(threads) == "2");
+  }
 }
 
 TEST(RotationPlanners, CellsStopAtTheStepBudgetAndTheOthersStepAheadOrWait) {

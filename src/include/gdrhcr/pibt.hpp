@@ -28,7 +28,8 @@
 // (recursively, up to kOpVisits builds of an agent a round); a chain that fails is undone and the
 // next operation tried. With a deadline the rest of the time rebuilds agents in random order
 // (the same rule), keeping each change that does not lower the fleet's score (each agent's gain
-// over waiting, weighted by its rank: EPIBT's LNS), until a round gains nothing. Only the first
+// over waiting, weighted by its rank: EPIBT's LNS), until a round gains nothing; with
+// search_threads the rounds run in two halves of the map at once (across x and y in turn). Only the first
 // action is executed. A call in which more than half of its agents have stood kStallSteps steps
 // or more is planned over cells instead: operations do not get out of some jams that cells do
 // (rooms' doors). PibtOptions::rotation picks these operations or cells chosen with turns
@@ -114,6 +115,9 @@ struct PibtOptions {
   // its wait ends). A packed crowd keeps a few goals deferred at any time, and each waiting agent
   // still sets out once enough others begin to wait after it.
   int dead_end_parked = 0;
+  // Rotation model over operations, with a deadline: with 2 or more the search runs in two zones
+  // of the map at once, one thread each (search_zones).
+  int search_threads = 1;
 };
 
 // PIBT as published (the paper configuration and RHCR's fallback): no swap.
@@ -156,6 +160,7 @@ class PibtStep {
   long starts() const { return starts_; }            // rotation_starts: PIBT runs made
   long starts_won() const { return starts_won_; }    // ... configurations a shaken run gave
   long search_rounds() const { return op_search_rounds_; }  // operations: rounds of the search
+  long zoned_rounds() const { return op_zoned_rounds_; }   // ... of them in two zones at once
   long stalls() const { return stalls_; }  // operations: calls planned over cells (stalled)
   long operation_calls() const { return op_calls_; }  // rotation model: calls planned over operations
   static constexpr int kStartBox = 4;
@@ -186,6 +191,15 @@ class PibtStep {
     int16_t code = 0;
   };
   enum class OpResult { kAccepted, kFailed, kRejected };
+  // The search's state where it runs: a zone of the map (0: the whole map; else the cells op_zone_
+  // marks with its id), its agents, its round, and the change in the fleet's score it made.
+  struct OpZone {
+    uint8_t id = 0;
+    int round = 0;
+    double score = 0, before = 0;
+    std::mt19937_64 rng;
+    std::vector<int> agents;
+  };
   void plan_operations(const WorldView& world, std::vector<Cell>& next,
                        const std::vector<std::pair<Cell, Cell>>& fixed_moves);
   bool op_choice(const WorldView& world, int ai, int code, OpChoice& out) const;
@@ -194,31 +208,41 @@ class PibtStep {
   const OpChoice& listed(int ai, int code) const;
   void start_operation(const WorldView& world, int ai);
   void wait_in_place(const WorldView& world, int ai);
-  OpResult build(const WorldView& world, int ai, bool search, double root, int depth, long& counter);
-  void rebuild(const WorldView& world, int ai, bool search);
+  OpResult build(const WorldView& world, int ai, bool search, double root, int depth, long& counter, OpZone& z);
+  void rebuild(const WorldView& world, int ai, bool search, OpZone& z);
   void first_pass(const WorldView& world, std::chrono::steady_clock::time_point start);
   void search_operations(const WorldView& world);
   bool past_deadline(long& counter) const;
   bool stalled();
   bool over_operations(const WorldView& world);
   int blocker(int ai, const OpPath& p) const;
-  void reserve(int ai);
-  void release(int ai);
+  void reserve(int ai, double& score);
+  void release(int ai, double& score);
   int& res(int k, Cell c) { return res_[size_t(k - 1) * grid_.num_cells() + c]; }
   int res(int k, Cell c) const { return res_[size_t(k - 1) * grid_.num_cells() + c]; }
   std::vector<int> res_;          // kOpSteps x cells: who holds cell c at t+k; -1 free, kFixed
-  std::vector<OpChoice> op_held_;  // per agent: the operation it holds (carried on to the next step)
-  std::vector<int> op_held_t_;     // ... planned at this timestep
+  // Per agent, what a build writes, one cache line each (two zones' threads write their own agents):
+  // the operation it holds (carried on to the next step), the round of its last build, the builds
+  // in that round, and whether it is on the build's stack.
+  struct alignas(64) OpAgent {
+    OpChoice held;
+    int visit = 0, visits = 0;
+    uint8_t on_stack = 0;
+  };
+  std::vector<OpAgent> op_;
+  std::vector<int> op_held_t_;     // per agent: the timestep its operation was planned at
   std::vector<int> op_wait_cost_;  // per agent: the cost of waiting
   std::vector<double> op_power_;   // per agent: its weight in the score
   std::vector<double> op_key_;     // per agent: its priority this call (larger first)
   std::vector<OpChoice> op_cand_;  // per agent, kMaxOps slots: its operations, best first
   std::vector<int> op_cand_n_;
-  std::vector<int> op_visit_, op_visits_;  // per agent: the round of its last build, builds in it
-  std::vector<uint8_t> op_on_stack_;
+  bool zone_holds(const OpZone& z, const OpPath& p) const;
+  void search_round(const WorldView& world, OpZone& z);
+  void search_zones(const WorldView& world, int axis);
+  std::vector<uint8_t> op_zone_;  // per cell: the zone it lies in this round (search_zones), 0 none
   int op_round_ = 0;
-  double op_score_ = 0, op_score_before_ = 0;
-  long op_search_rounds_ = 0;
+  double op_score_ = 0;
+  long op_search_rounds_ = 0, op_zoned_rounds_ = 0;
   long stalls_ = 0;
   long op_calls_ = 0;
   bool op_auto_ = false;  // kAuto: the last call was planned over operations
