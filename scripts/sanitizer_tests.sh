@@ -21,9 +21,9 @@ cmake --build "$top/build-asan" -j"$jobs" --target gdrhcr_core_tests gdrhcr_sim 
 "$top/build-asan/test/gdrhcr_core_tests" --gtest_brief=1
 "$top/build-asan/test/deadline_planner_tests" --gtest_brief=1
 
-echo "--- TSan build (parallel GD-RHCR, the windowed LNS's zones, the shared distance table, the node's DeadlinePlanner)"
+echo "--- TSan build (parallel GD-RHCR, the windowed LNS's zones, the search over operations' halves, the shared distance table, the node's DeadlinePlanner)"
 cmake -S "$top" -B "$top/build-tsan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGDRHCR_SANITIZE=thread >/dev/null
 cmake --build "$top/build-tsan" -j"$jobs" --target gdrhcr_core_tests deadline_planner_tests
-"$top/build-tsan/test/gdrhcr_core_tests" --gtest_brief=1 --gtest_filter='GdRhcr*:DistTable*:ImmovableAgents*:WindowLns.Zones*'
+"$top/build-tsan/test/gdrhcr_core_tests" --gtest_brief=1 --gtest_filter='GdRhcr*:DistTable*:ImmovableAgents*:WindowLns.Zones*:RotationPlanners.OperationsSearch*'
 "$top/build-tsan/test/deadline_planner_tests" --gtest_brief=1
 echo "sanitizer tests: clean"

@@ -345,14 +345,15 @@ void PibtStep::search_zones(const WorldView& world, int axis) {
 }
 
 // EPIBT's LNS until the deadline: agents rebuilt in random order, each change kept when the
-// fleet's score does not fall, until a round gains nothing. With search_threads, rounds run in two
-// zones at once, across x and y in turn, until two rounds in a row gain nothing.
+// fleet's score does not fall, until a round gains nothing. With search_threads the rounds run in
+// two zones at once, across x and y in turn, until two rounds in a row gain nothing; then over the
+// whole map (for the chains across the cuts) until a round gains nothing.
 void PibtStep::search_operations(const WorldView& world) {
-  const bool zoned = opt_.search_threads > 1;
+  bool zoned = opt_.search_threads > 1;
   OpZone whole;
   whole.agents = order_;
-  if (!zoned) whole.rng.seed(rng_());
-  for (int idle = 0, round = 0; idle < (zoned ? 2 : 1) && std::chrono::steady_clock::now() < deadline_; ++round) {
+  whole.rng.seed(rng_());
+  for (int idle = 0, round = 0; std::chrono::steady_clock::now() < deadline_; ++round) {
     const double before = op_score_;
     ++op_search_rounds_;
     if (zoned) {
@@ -362,7 +363,9 @@ void PibtStep::search_operations(const WorldView& world) {
       search_round(world, whole);
       op_score_ += whole.score;
     }
-    idle = op_score_ > before + 1e-9 ? 0 : idle + 1;
+    if (op_score_ > before + 1e-9) idle = 0;
+    else if (!zoned) break;
+    else if (++idle == 2) zoned = false;
   }
 }
 
