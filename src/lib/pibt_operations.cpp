@@ -326,7 +326,10 @@ void PibtStep::search_zones(const WorldView& world, int axis) {
   std::nth_element(at.begin(), at.begin() + at.size() / 2, at.end());
   const int below = at[at.size() / 2] - 1 - kOpSteps / 2, above = below + kOpSteps + 1;
   op_zone_.resize(grid_.num_cells());
-  for (Cell c = 0; c < grid_.num_cells(); ++c) op_zone_[c] = along(c) <= below ? 1 : along(c) >= above ? 2 : 0;
+  for (Cell c = 0; c < grid_.num_cells(); ++c) {
+    const int v = along(c);
+    op_zone_[c] = v <= below ? 1 : v >= above ? 2 : 0;
+  }
   OpZone zones[2];
   for (int k = 0; k < 2; ++k) zones[k].id = k + 1, zones[k].round = ++op_round_, zones[k].rng.seed(rng_());
   for (int i : order_)
