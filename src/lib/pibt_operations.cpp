@@ -282,11 +282,14 @@ void PibtStep::wait_in_place(const WorldView& world, int ai) {
 }
 
 // The first pass: the agents built in priority order until the deadline, the rest keeping the
-// operation they hold. Its time since `start` (kAuto), scaled up to the whole call when the
-// deadline cut it short, is smoothed over the calls (one slow step should not change the way).
+// operation they hold. Its time since `start` (kAuto; the building loop scaled up to the whole
+// call when the deadline cut it short, the setup before it not) is smoothed over the calls (one
+// slow step should not change the way). A call whose deadline passed before the loop began (a
+// first call's setup sizes the tables for the fleet) measured nothing.
 void PibtStep::first_pass(const WorldView& world, std::chrono::steady_clock::time_point start) {
   OpZone map;
   map.round = ++op_round_;
+  const auto loop = std::chrono::steady_clock::now();
   size_t reached = 0;  // agents of the priority order the first pass got to
   for (int i : order_) {
     if (std::chrono::steady_clock::now() >= deadline_) {  // the rest keep the operation they hold
@@ -297,8 +300,10 @@ void PibtStep::first_pass(const WorldView& world, std::chrono::steady_clock::tim
     if (op_[i].visit != op_round_ && !world.is_immovable(i)) rebuild(world, i, false, map);
   }
   op_score_ += map.score;
-  const double pass = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double whole = pass * static_cast<double>(order_.size()) / static_cast<double>(std::max<size_t>(reached, 1));
+  if (reached == 0) return;  // the deadline had passed before the pass began: nothing to scale up
+  using Seconds = std::chrono::duration<double>;
+  const double setup = Seconds(loop - start).count(), pass = Seconds(std::chrono::steady_clock::now() - loop).count();
+  const double whole = setup + pass * static_cast<double>(order_.size()) / static_cast<double>(reached);
   op_pass_s_ = op_pass_s_ > 0 ? op_pass_s_ + kOpPassWeight * (whole - op_pass_s_) : whole;
 }
 

@@ -311,6 +311,45 @@ TEST(RotationPlanners, AutoPlansOverOperationsOnlyWhenTheDeadlineLeavesRoom) {
   EXPECT_EQ(pos[1], g.cell(0, 1));
 }
 
+TEST(RotationPlanners, AutoIsNotRuledOutByACallWhoseDeadlinePassedBeforeItsFirstPass) {
+  // kAuto over 3,000 agents: a call decided over operations whose deadline passes during its setup
+  // (each agent's operations listed) builds nobody, so it measures no first pass. The next call,
+  // with a deadline 10 s off, is over operations again (that setup scaled up from no agent, or
+  // from one, would rule operations out for thousands of steps). The deadline is 1 ms off, so on
+  // a loaded machine the call may be decided past it (over cells): tried up to 5 times.
+  const Grid g = Grid::from_rows(std::vector<std::string>(80, std::string(80, '.')));
+  DistTable dist(g, ActionModel::kRotation);
+  PibtOptions o;
+  o.rotation = PibtOptions::Rotation::kAuto;
+  const int n = 3000;
+  PibtStep pibt(g, n, 11, o);
+  std::vector<Cell> pos;
+  std::vector<Heading> heads;
+  std::vector<std::vector<Cell>> goals;
+  for (int i = 0; i < n; ++i) {
+    pos.push_back(g.cell(i % 80, 2 * (i / 80)));
+    heads.push_back(kEast);
+    goals.push_back({g.cell(79 - i % 80, 79 - 2 * (i / 80))});
+  }
+  StepValidator validator(g, ActionModel::kRotation);
+  using Clock = std::chrono::steady_clock;
+  int t = 0;
+  ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads));  // rows; over cells
+  ASSERT_EQ(pibt.operation_calls(), 0);
+  bool cut = false;  // a call over operations stopped by its deadline
+  for (int attempt = 0; attempt < 5 && !cut; ++attempt) {
+    const long calls = pibt.operation_calls(), stops = pibt.deadline_stops();
+    pibt.set_deadline(Clock::now() + std::chrono::milliseconds(1));
+    ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads));
+    cut = pibt.operation_calls() > calls && pibt.deadline_stops() > stops;
+  }
+  ASSERT_TRUE(cut) << "no call was decided over operations before its deadline";
+  const long calls = pibt.operation_calls();
+  pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
+  ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads));
+  EXPECT_EQ(pibt.operation_calls(), calls + 1);
+}
+
 TEST(RotationPlanners, OperationsStalledForLongArePlannedOverCells) {
   // Every agent stands on its goal for kStallSteps steps; then the fourth gets a goal at the far
   // end of the corridor. From then on more than half of the call (the three) has stood kStallSteps
