@@ -313,10 +313,11 @@ TEST(RotationPlanners, AutoPlansOverOperationsOnlyWhenTheDeadlineLeavesRoom) {
 
 TEST(RotationPlanners, AutoIsNotRuledOutByACallWhoseDeadlinePassedBeforeItsFirstPass) {
   // kAuto over 3,000 agents: a call decided over operations whose deadline passes during its setup
-  // (each agent's operations listed) builds nobody, so it measures no first pass. The next call,
-  // with a deadline 10 s off, is over operations again (that setup scaled up from no agent, or
-  // from one, would rule operations out for thousands of steps). The deadline is 1 ms off, so on
-  // a loaded machine the call may be decided past it (over cells): tried up to 5 times.
+  // (each agent's operations listed) builds nobody, so it measures no first pass (on a fast
+  // machine it may build a few, which scale up to a few seconds at most). The next call, with a
+  // deadline 10 s off, is over operations again (that setup scaled up from no agent, or from one,
+  // would rule operations out for thousands of steps). The deadline is 1 ms off, so on a loaded
+  // machine the call may be decided past it (over cells): tried up to 5 times.
   const Grid g = Grid::from_rows(std::vector<std::string>(80, std::string(80, '.')));
   DistTable dist(g, ActionModel::kRotation);
   PibtOptions o;
