@@ -43,10 +43,11 @@ FreeCellIndex::FreeCellIndex(const Grid& grid, const std::vector<Cell>& blocked_
   if (costs.any()) {
     // The rotation model only: the mapf model's SIPP runs out of memory on costed rows.
     if (model != ActionModel::kRotation)
-      throw std::invalid_argument("traffic-cost and lane-cost apply to the rotation model only");
+      throw std::invalid_argument("traffic-cost, lane-cost and open-cost apply to the rotation model only");
     cost.assign(size_t(num_free) * kNumHeadings, 1);
     if (costs.traffic > 0) add_traffic_cost(costs.traffic);
     if (costs.lane > 0) add_lane_cost(grid, costs.lane, costs.lane_style);
+    if (costs.open > 0) add_open_cost(grid, costs.open);
     if (max_cost == 1) cost.clear();  // e.g. lanes on a map without aisles: plain BFS rows
   }
   if (model == ActionModel::kRotation) {
@@ -98,6 +99,15 @@ void FreeCellIndex::add_lane_cost(const Grid& grid, double extra, LaneStyle styl
   for (int32_t s = 0; s < num_free; ++s)
     for (Heading h = 0; h < kNumHeadings; ++h)
       if (lanes.against(grid, cell_of[s], h)) raise_cost(s, h, std::lround(extra));
+}
+
+// Open cost (see the header): a forward move along an open area (lanes.hpp) costs `extra` more,
+// rounded.
+void FreeCellIndex::add_open_cost(const Grid& grid, double extra) {
+  const OpenAreas areas = derive_open_areas(grid);
+  for (int32_t s = 0; s < num_free; ++s)
+    for (Heading h = 0; h < kNumHeadings; ++h)
+      if (areas.along(grid, cell_of[s], h)) raise_cost(s, h, std::lround(extra));
 }
 
 void FreeCellIndex::raise_cost(int32_t slot, int heading, long extra) {

@@ -1,20 +1,28 @@
 #include "gdrhcr/lanes.hpp"
 
+#include <algorithm>
+
 namespace gdrhcr {
 
 namespace {
 
-// Lanes along one axis: `lines` lines of `len` cells, free(i, k) for cell k of line i.
+// The open lines along one axis: `lines` lines of `len` cells, free(i, k) for cell k of line i;
+// a line is open when at least half of its cells are free.
 template <typename Free>
-std::vector<Heading> lanes_along(int lines, int len, Free free, Heading first, Heading second) {
+std::vector<char> open_lines(int lines, int len, Free free) {
   std::vector<char> open(lines, 0);
   for (int i = 0; i < lines; ++i) {
     int n = 0;
     for (int k = 0; k < len; ++k) n += free(i, k);
     open[i] = 2 * n >= len;
   }
-  std::vector<Heading> dir(lines, kNoHeading);
-  int lane = 0;
+  return open;
+}
+
+// Calls f(first, end) for each run [first, end) of open lines.
+template <typename F>
+void for_each_run(const std::vector<char>& open, F f) {
+  const int lines = static_cast<int>(open.size());
   for (int i = 0; i < lines;) {
     if (!open[i]) {
       ++i;
@@ -22,10 +30,33 @@ std::vector<Heading> lanes_along(int lines, int len, Free free, Heading first, H
     }
     int j = i;
     while (j < lines && open[j]) ++j;
-    if (j - i == 1) dir[i] = lane++ % 2 ? second : first;
+    f(i, j);
     i = j;
   }
+}
+
+// Lanes along one axis: each run of one open line is an aisle.
+std::vector<Heading> lanes_along(const std::vector<char>& open, Heading first, Heading second) {
+  std::vector<Heading> dir(open.size(), kNoHeading);
+  int lane = 0;
+  for_each_run(open, [&](int i, int j) {
+    if (j - i == 1) dir[i] = lane++ % 2 ? second : first;
+  });
   return dir;
+}
+
+// Open areas along one axis: the runs of two or more open lines, if the axis has more aisles
+// than lines in such runs (else the open areas are the map's main travel space, as the side
+// rooms of warehouse-10-20-10-2-1, and the aisles the exception).
+std::vector<char> areas_along(const std::vector<char>& open) {
+  std::vector<char> area(open.size(), 0);
+  int aisles = 0, wide = 0;
+  for_each_run(open, [&](int i, int j) { (j - i == 1 ? aisles : wide) += j - i; });
+  if (aisles > wide)
+    for_each_run(open, [&](int i, int j) {
+      if (j - i > 1) std::fill(area.begin() + i, area.begin() + j, 1);
+    });
+  return area;
 }
 
 // kLines along one axis: a line is a lane when at least half of the moves along it (pairs of
@@ -55,9 +86,24 @@ Lanes derive_lanes(const Grid& grid, LaneStyle style) {
     l.col = lines_along(w, h, col_free, kSouth, kNorth);
     return l;
   }
-  l.row = lanes_along(h, w, row_free, kEast, kWest);
-  l.col = lanes_along(w, h, col_free, kSouth, kNorth);
+  l.row = lanes_along(open_lines(h, w, row_free), kEast, kWest);
+  l.col = lanes_along(open_lines(w, h, col_free), kSouth, kNorth);
   return l;
+}
+
+OpenAreas derive_open_areas(const Grid& grid) {
+  const int w = grid.width(), h = grid.height();
+  auto row_free = [&](int y, int x) { return grid.is_free(grid.cell(x, y)); };
+  auto col_free = [&](int x, int y) { return grid.is_free(grid.cell(x, y)); };
+  return {areas_along(open_lines(h, w, row_free)), areas_along(open_lines(w, h, col_free))};
+}
+
+bool OpenAreas::along(const Grid& grid, Cell c, Heading h) const {
+  return h == kEast || h == kWest ? row[grid.y_of(c)] : col[grid.x_of(c)];
+}
+
+int OpenAreas::num_lines() const {
+  return static_cast<int>(std::count(row.begin(), row.end(), 1) + std::count(col.begin(), col.end(), 1));
 }
 
 bool Lanes::against(const Grid& grid, Cell c, Heading h) const {

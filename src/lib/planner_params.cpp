@@ -30,6 +30,11 @@ double MapFacts::fleet_share() const { return double(num_agents_) / std::max<siz
 
 size_t MapFacts::free_cells() const { return grid_->free_cells().size(); }
 
+bool MapFacts::open_areas() const {
+  if (!open_areas_) open_areas_ = derive_open_areas(*grid_).num_lines() > 0;
+  return *open_areas_;
+}
+
 namespace {
 
 // ---------------------------------------------------------------------------------------------
@@ -56,15 +61,23 @@ std::string rule_thousands(const std::string& param, const MapFacts& f, const Pl
 std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerParams&) {
   return !thousands(f) && many_cut_cells(f) ? "8" : "0";
 }
+// Where PIBT plans 3-action operations (EPIBT) in the rotation model, when the step's time
+// allows (auto): fleets filling more than 90% of the free cells, and maps with open areas beside
+// their aisles (lanes.hpp), where a move along an open area costs 2 more (only over operations:
+// PIBT over cells loses with it).
+std::string rule_operations(const std::string& param, const MapFacts& f, const PlannerParams& earlier) {
+  const bool rotation = f.model() == ActionModel::kRotation;
+  if (param == "rotation-pibt") return rotation && (crowded_fleet(f) || f.open_areas()) ? "auto" : "cells";
+  return rotation && f.open_areas() && earlier.text("rotation-pibt") != "cells" ? "2" : "0";  // open-cost
+}
 // Fleets filling more than 90% of the free cells: agents wait 500 steps before they set out for a
 // dead end, and longer while no more wait than the fleet has agents beyond 90% of the free cells;
-// in the rotation model PIBT plans 3-action operations (EPIBT), with the swap after 20 steps
-// standing. Over cells (given) no agent retreats to let another pass and PIBT's
-// configurations are carried out to the end, each the best of 16 runs.
+// in the rotation model the swap applies after 20 steps standing. Over cells (given) no agent
+// retreats to let another pass and PIBT's configurations are carried out to the end, each the best
+// of 16 runs.
 std::string rule_crowded(const std::string& param, const MapFacts& f, const PlannerParams& earlier) {
   const bool crowded = crowded_fleet(f);
   const bool rotation = f.model() == ActionModel::kRotation;
-  if (param == "rotation-pibt") return crowded && rotation ? "auto" : "cells";
   if (param == "rotation-commit") return crowded && rotation ? "1" : "0";
   if (param == "dead-end-wait") return crowded ? "500" : "0";
   if (param == "dead-end-parked") return crowded ? std::to_string(agents_past_crowded(f)) : "0";
@@ -116,14 +129,18 @@ const std::vector<ParamRule>& param_rules() {
        "8 steps on maps with at least 1% cut cells (dead ends, one-lane passages), where motion strays from guidance; "
        "none elsewhere or past 2,000 agents",
        std::string(kRulesFigure) + "motion-forecast", rule_forecast},
+      {"operations",
+       "rotation model, fleets holding more than 90% of the free cells and maps with open areas beside their "
+       "aisles (lanes.hpp): PIBT plans over operations when the step budget leaves room for their search, else over "
+       "cells (rotation-pibt auto; elsewhere cells); over operations on a map with open areas a forward move along "
+       "one costs 2 more (open-cost 2; elsewhere 0)",
+       std::string(kRulesFigure) + "operations", rule_operations},
       {"crowded-fleet",
        "fleets holding more than 90% of the free cells: agents wait 500 steps before they set out for a dead end "
        "(dead-end-wait 500), and longer while no more wait than the fleet has agents beyond 90% of the free cells "
-       "(dead-end-parked); in the rotation model PIBT plans over operations when the step budget leaves room for "
-       "their search, else over cells (rotation-pibt auto; elsewhere cells), "
-       "with the swap after 20 steps standing; over cells (given) no agent retreats for another (rotation-swap-wait 0) "
-       "and PIBT's configurations are carried out to the end (rotation-commit 1), each the best of 16 runs "
-       "(rotation-starts 16)",
+       "(dead-end-parked); in the rotation model the swap applies after 20 steps standing; over cells (given) no "
+       "agent retreats for another (rotation-swap-wait 0) and PIBT's configurations are carried out to the end "
+       "(rotation-commit 1), each the best of 16 runs (rotation-starts 16)",
        std::string(kRulesFigure) + "crowded-fleet", rule_crowded},
       {"guidance-off",
        "PIBT alone moves (guidance none) where guidance paths cannot be followed: fleets holding more than 90% of "
@@ -188,7 +205,7 @@ std::vector<ParamSpec> pibt_rows() {
                  "budget its LNS spends the rest), over cells chosen with turns counted and executed turning first, "
                  "or (auto) over operations when the time left to the step's deadline is " +
                      fmt_number(PibtStep::kOpRoom) + " times their first pass (room for the search), else over cells",
-                 "operations", "crowded-fleet"),
+                 "operations", "operations"),
           integer("rotation-swap-wait", 0, 1000, "",
                   "rotation model: the swap applies to an agent that has stood in its cell this many steps (0 = never)",
                   "crowded-fleet", "0"),
@@ -227,7 +244,12 @@ std::vector<ParamSpec> pibt_rows() {
                "0 = none)"),
           choice("lanes", {"aisles", "lines"}, "aisles",
                  "rotation model, with lane-cost: the one-way lanes are the map's one-cell aisles, or every row and "
-                 "column one can travel along, alternating")};
+                 "column one can travel along, alternating"),
+          real("open-cost", 0, 8, "",
+               "rotation model: extra cost of a forward move along an open area of a map with aisles (two or more "
+               "open rows or columns side by side, such as the band before a warehouse's stations; see lanes), so "
+               "distances travel in the aisles and cross the open areas (0 = none)",
+               "operations", "0")};
 }
 
 // Local guidance (PIBT following windowed paths); `product` selects GD-RHCR's product defaults.
@@ -470,7 +492,8 @@ std::string PlannerParams::format() const {
 StepCosts step_costs(const PlannerParams& values, ActionModel model) {
   StepCosts c;
   if (values.has("lanes") && values.text("lanes") == "lines") c.lane_style = LaneStyle::kLines;
-  for (auto [name, value] : {std::pair{"traffic-cost", &c.traffic}, std::pair{"lane-cost", &c.lane}}) {
+  for (auto [name, value] :
+       {std::pair{"traffic-cost", &c.traffic}, std::pair{"lane-cost", &c.lane}, std::pair{"open-cost", &c.open}}) {
     *value = values.has(name) ? values.real(name) : 0;
     if (*value > 0 && model != ActionModel::kRotation)
       throw ParamError(std::string("parameter ") + name + " applies to the rotation model only (got " +

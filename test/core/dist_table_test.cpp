@@ -403,3 +403,25 @@ TEST(DistTable, LaneCostSendsTrafficAlongTheNextAisleTheOtherWay) {
                                                     StepCosts{2.0, 2.0});
   expect_rows_shortest_under_costs(g, both, rng);
 }
+
+// Open cost (rotation): a band two rows high above shelves with three one-cell aisles. From the west end
+// of the aisle in row 3, facing north, the goal at the band's east end is 14 steps away along the
+// band (3 north, a turn, 10 east) and 15 along the aisle (a turn, 10 east, a turn, 3 north). With
+// open-cost 2 each of the band's 10 moves east costs 3, so the row leads along the aisle; crossing
+// the band (north in column 0) costs nothing more.
+TEST(DistTable, OpenCostSendsTravelAlongTheAislesAndAcrossTheBand) {
+  const Grid g = Grid::from_rows({"...........", "...........", ".@@@@@@@@@.", "...........", ".@@@@@@@@@.",
+                                  "...........", ".@@@@@@@@@.", "..........."});
+  StepCosts costs;
+  costs.open = 2;
+  auto open = std::make_shared<const FreeCellIndex>(g, std::vector<Cell>{}, ActionModel::kRotation, costs);
+  auto plain = std::make_shared<const FreeCellIndex>(g, std::vector<Cell>{}, ActionModel::kRotation);
+  const Cell start = g.cell(0, 3), goal = g.cell(10, 0);
+  EXPECT_EQ(DistRow(plain, goal).at(start, kNorth), 14);
+  EXPECT_EQ(DistRow(open, goal).at(start, kNorth), 15);
+  EXPECT_EQ(DistRow(open, g.cell(0, 0)).at(g.cell(0, 7), kNorth), 7);
+  EXPECT_EQ(open->max_cost, 3);
+  std::mt19937_64 rng(11);
+  expect_rows_shortest_under_costs(g, open, rng);
+  EXPECT_THROW(FreeCellIndex(g, {}, ActionModel::kMapf, costs), std::invalid_argument);
+}

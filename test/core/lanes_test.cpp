@@ -86,3 +86,34 @@ TEST(Lanes, TheLinesStyleSkipsLinesTheObstaclesBreak) {
   EXPECT_FALSE(l.against(g, g.cell(2, 1), kEast));
   EXPECT_TRUE(l.against(g, g.cell(3, 2), kEast));   // row 2 goes west
 }
+
+TEST(Lanes, OpenAreasAreTheWideRunsOnAnAxisWithAisles) {
+  // Rows 0, 2, 4, 6 are aisles and rows 8-9 an open area two rows high: an open area. Every column
+  // is at least half free, one run with no aisle among them: no open area across the columns.
+  const Grid g = Grid::from_rows({"............", ".@@@@@@@@@@.", "............", ".@@@@@@@@@@.",
+                                  "............", ".@@@@@@@@@@.", "............", "@@@@@@@@@@@@",
+                                  "............", "............"});
+  const OpenAreas a = derive_open_areas(g);
+  EXPECT_EQ(a.row, (std::vector<char>{0, 0, 0, 0, 0, 0, 0, 0, 1, 1}));
+  EXPECT_EQ(a.col, std::vector<char>(12, 0));
+  EXPECT_EQ(a.num_lines(), 2);
+  EXPECT_TRUE(a.along(g, g.cell(5, 8), kEast));
+  EXPECT_TRUE(a.along(g, g.cell(5, 9), kWest));
+  EXPECT_FALSE(a.along(g, g.cell(5, 9), kNorth));  // crossing it
+  EXPECT_FALSE(a.along(g, g.cell(5, 2), kEast));   // an aisle
+  // Without aisles every open line is in one wide run, and there are no open areas at all.
+  EXPECT_EQ(derive_open_areas(Grid::from_rows({"....", "....", ".@..", "...."})).num_lines(), 0);
+}
+
+TEST(Lanes, TheBenchmarkMapsOpenAreas) {
+  // lorr-warehouse-140-500: the bands above and below the shelves (rows 0-2, 137-139), crossed by
+  // 44 aisles; its columns have no aisles. warehouse-10-20-10-2-1's open columns are its side rooms,
+  // 50 columns against 9 aisles: the main travel space, not an open area. Random, room and empty
+  // maps have no aisles, hence no open areas.
+  const OpenAreas w = derive_open_areas(Grid::load(repo("maps/lorr-warehouse-140-500.map")));
+  for (int y = 0; y < 140; ++y) EXPECT_EQ(w.row[y], y <= 2 || y >= 137) << "row " << y;
+  EXPECT_EQ(w.col, std::vector<char>(500, 0));
+  for (const char* map : {"maps/warehouse-10-20-10-2-1.map", "maps/random-32-32-20.map", "maps/room-64-64-8.map",
+                          "maps/empty-48-48.map", "maps/warehouse-10-20-10-2-2.map"})
+    EXPECT_EQ(derive_open_areas(Grid::load(repo(map))).num_lines(), 0) << map;
+}

@@ -40,7 +40,10 @@
 //     rows lead around the map's busiest cells when the detour is short, and traffic that would
 //     all cross the middle of a city spreads out;
 //   - lane cost: a move against the direction of the one-way lane it is in (lanes.hpp, derived
-//     from the map's aisles) costs more, so rows send traffic one way along each aisle.
+//     from the map's aisles) costs more, so rows send traffic one way along each aisle;
+//   - open cost: a move along an open area of a map with aisles (lanes.hpp; a warehouse's band
+//     before its stations) costs more, so rows travel the map's length in the aisles and cross
+//     the open areas.
 
 // Thread-safe: parallel groups query it at once. Two threads asking for the same missing row at
 // the same moment may both run its BFS (counted); one copy is kept.
@@ -70,7 +73,8 @@ struct StepCosts {
   double traffic = 0;  // up to this much more into the busiest cells
   double lane = 0;     // this much more against a lane's direction
   LaneStyle lane_style = LaneStyle::kAisles;  // which lines the lanes are (lanes.hpp)
-  bool any() const { return traffic > 0 || lane > 0; }
+  double open = 0;     // this much more along an open area
+  bool any() const { return traffic > 0 || lane > 0 || open > 0; }
 };
 
 // The free cells of a grid as dense slots 0..F-1 (in increasing cell order), the neighbour lists
@@ -94,6 +98,7 @@ struct FreeCellIndex {
   static constexpr double kTrafficPercentile = 0.99;
   void add_traffic_cost(double strength);
   void add_lane_cost(const Grid& grid, double extra, LaneStyle style);
+  void add_open_cost(const Grid& grid, double extra);
   void raise_cost(int32_t slot, int heading, long extra);
   // A shortest path over (cell, heading) states makes at most F - 1 moves, at most one turn
   // between two moves and two before the first, so its length is below 2F: rotation rows are

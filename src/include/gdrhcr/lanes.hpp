@@ -20,6 +20,12 @@
 // A lane gives a direction only; DistTable makes a forward move against it dearer (lane-cost),
 // so distances, and every planner that follows them, prefer the lane's way but may still take
 // a short way back (it is a cost, not a rule, and never needed for a valid plan).
+// Open areas: on an axis whose aisles outnumber its open lines in runs of two or more, those runs
+// are open areas, such as the band between a warehouse's shelves and its stations. Travel along
+// the map's length can keep to the aisles; an open area is where robots cross into an aisle or
+// wait at a station, and travel along it crosses all of them. DistTable can make a forward move
+// along an open area dearer (open-cost). An axis without aisles (a random map, a city) has none,
+// nor one whose open runs are its main travel space (the side rooms of warehouse-10-20-10-2-1).
 #pragma once
 
 #include <vector>
@@ -39,6 +45,17 @@ struct Lanes {
 };
 
 enum class LaneStyle { kAisles, kLines };
+
+struct OpenAreas {
+  std::vector<char> row;  // per row: 1 when it is in an open area (on an axis with aisles)
+  std::vector<char> col;  // per column: the same
+
+  // True when a forward move in heading h into cell c goes along its row's or column's open area.
+  bool along(const Grid& grid, Cell c, Heading h) const;
+  int num_lines() const;
+};
+
+OpenAreas derive_open_areas(const Grid& grid);
 
 Lanes derive_lanes(const Grid& grid, LaneStyle style = LaneStyle::kAisles);
 

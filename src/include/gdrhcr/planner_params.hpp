@@ -44,11 +44,13 @@ class MapFacts {
   double cut_cell_share() const;  // computed once, on first use
   double fleet_share() const;     // agents per free cell
   size_t free_cells() const;
+  bool open_areas() const;        // the map has open areas beside aisles (lanes.hpp); computed once
  private:
   const Grid* grid_;
   int num_agents_;
   ActionModel model_;
   mutable std::optional<double> cut_share_;
+  mutable std::optional<bool> open_areas_;
 };
 
 class PlannerParams;
