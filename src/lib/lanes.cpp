@@ -45,16 +45,20 @@ std::vector<Heading> lanes_along(const std::vector<char>& open, Heading first, H
   return dir;
 }
 
-// Open areas along one axis: the runs of two or more open lines, if the axis has more aisles
-// than lines in such runs (else the open areas are the map's main travel space, as the side
-// rooms of warehouse-10-20-10-2-1, and the aisles the exception).
+// Open areas along one axis: the runs of two or more open lines beyond the first or the last
+// aisle (between the aisles and the map's edge), if the axis has more aisles than lines in such
+// runs. Runs between aisles are highways between shelf blocks; where wide runs outnumber the
+// aisles they are the map's main travel space (the side rooms of warehouse-10-20-10-2-1).
 std::vector<char> areas_along(const std::vector<char>& open) {
   std::vector<char> area(open.size(), 0);
-  int aisles = 0, wide = 0;
-  for_each_run(open, [&](int i, int j) { (j - i == 1 ? aisles : wide) += j - i; });
+  int aisles = 0, wide = 0, first = -1, last = -1;
+  for_each_run(open, [&](int i, int j) {
+    (j - i == 1 ? aisles : wide) += j - i;
+    if (j - i == 1) last = i, first = first < 0 ? i : first;
+  });
   if (aisles > wide)
     for_each_run(open, [&](int i, int j) {
-      if (j - i > 1) std::fill(area.begin() + i, area.begin() + j, 1);
+      if (j - i > 1 && (j <= first || i > last)) std::fill(area.begin() + i, area.begin() + j, 1);
     });
   return area;
 }

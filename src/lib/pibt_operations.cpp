@@ -285,7 +285,15 @@ void PibtStep::wait_in_place(const WorldView& world, int ai) {
 // operation they hold. Its time since `start` (kAuto; the building loop scaled up to the whole
 // call when the deadline cut it short, the setup before it not) is smoothed over the calls (one
 // slow step should not change the way). A call whose deadline passed before the loop began (a
-// first call's setup sizes the tables for the fleet) measured nothing.
+// first call's setup sizes the tables for the fleet) measured nothing. A loop cut after a few
+// agents (one long chain of builds) shows that the pass needs more than the time it had, not
+// fleet / reached times more: the scale is at most kOpCutScale (else one such call rules
+// operations out for thousands of steps).
+double PibtStep::first_pass_estimate(double setup, double loop, size_t fleet, size_t reached) {
+  if (reached >= fleet) return setup + loop;
+  return setup + std::min(loop * static_cast<double>(fleet) / static_cast<double>(reached), kOpCutScale * loop);
+}
+
 void PibtStep::first_pass(const WorldView& world, std::chrono::steady_clock::time_point start) {
   OpZone map;
   map.round = ++op_round_;
@@ -303,7 +311,7 @@ void PibtStep::first_pass(const WorldView& world, std::chrono::steady_clock::tim
   if (reached == 0) return;  // the deadline had passed before the pass began: nothing to scale up
   using Seconds = std::chrono::duration<double>;
   const double setup = Seconds(loop - start).count(), pass = Seconds(std::chrono::steady_clock::now() - loop).count();
-  const double whole = setup + pass * static_cast<double>(order_.size()) / static_cast<double>(reached);
+  const double whole = first_pass_estimate(setup, pass, order_.size(), reached);
   op_pass_s_ = op_pass_s_ > 0 ? op_pass_s_ + kOpPassWeight * (whole - op_pass_s_) : whole;
 }
 

@@ -107,12 +107,16 @@ TEST(Lanes, OpenAreasAreTheWideRunsOnAnAxisWithAisles) {
 
 TEST(Lanes, TheBenchmarkMapsOpenAreas) {
   // lorr-warehouse-140-500: the bands above and below the shelves (rows 0-2, 137-139), crossed by
-  // 44 aisles; its columns have no aisles. warehouse-10-20-10-2-1's open columns are its side rooms,
-  // 50 columns against 9 aisles: the main travel space, not an open area. Random, room and empty
-  // maps have no aisles, hence no open areas.
+  // 44 aisles; its columns have no aisles. sortation-1: the bands at its four edges, two lines
+  // each; the highways five columns wide between its shelf blocks lie between aisles and are no
+  // open areas. warehouse-10-20-10-2-1's open columns are its side rooms, 50 columns against 9
+  // aisles: the main travel space. Random, room and empty maps have no aisles, hence no open areas.
   const OpenAreas w = derive_open_areas(Grid::load(repo("maps/lorr-warehouse-140-500.map")));
   for (int y = 0; y < 140; ++y) EXPECT_EQ(w.row[y], y <= 2 || y >= 137) << "row " << y;
   EXPECT_EQ(w.col, std::vector<char>(500, 0));
+  const OpenAreas s = derive_open_areas(Grid::load(repo("maps/sortation-1.map")));
+  for (int y = 0; y < 91; ++y) EXPECT_EQ(s.row[y], y <= 1 || y >= 89) << "row " << y;
+  for (int x = 0; x < 203; ++x) EXPECT_EQ(s.col[x], x <= 1 || x >= 201) << "column " << x;
   for (const char* map : {"maps/warehouse-10-20-10-2-1.map", "maps/random-32-32-20.map", "maps/room-64-64-8.map",
                           "maps/empty-48-48.map", "maps/warehouse-10-20-10-2-2.map"})
     EXPECT_EQ(derive_open_areas(Grid::load(repo(map))).num_lines(), 0) << map;

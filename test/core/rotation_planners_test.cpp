@@ -351,6 +351,17 @@ TEST(RotationPlanners, AutoIsNotRuledOutByACallWhoseDeadlinePassedBeforeItsFirst
   EXPECT_EQ(pibt.operation_calls(), calls + 1);
 }
 
+TEST(RotationPlanners, AFirstPassCutShortIsEstimatedAtMostTwiceItsLoop) {
+  // kAuto's estimate of the whole first pass: a pass that reached every agent took what it took;
+  // one the deadline cut is scaled up by fleet / reached, but to at most twice its loop: one long
+  // chain of builds at the start (100 of 10,000 agents in 80 ms) must not make it 8 s, which ruled
+  // operations out on warehouse_large for the rest of the run. The setup is never scaled.
+  EXPECT_DOUBLE_EQ(PibtStep::first_pass_estimate(0.005, 0.030, 10000, 10000), 0.035);
+  EXPECT_DOUBLE_EQ(PibtStep::first_pass_estimate(0.005, 0.080, 10000, 100), 0.005 + 2 * 0.080);
+  EXPECT_DOUBLE_EQ(PibtStep::first_pass_estimate(0.005, 0.030, 10000, 8000), 0.005 + 0.030 * 10000 / 8000);
+  EXPECT_DOUBLE_EQ(PibtStep::first_pass_estimate(0.010, 0.0, 10000, 1), 0.010);
+}
+
 TEST(RotationPlanners, OperationsStalledForLongArePlannedOverCells) {
   // Every agent stands on its goal for kStallSteps steps; then the fourth gets a goal at the far
   // end of the corridor. From then on more than half of the call (the three) has stood kStallSteps

@@ -20,8 +20,9 @@
 // A lane gives a direction only; DistTable makes a forward move against it dearer (lane-cost),
 // so distances, and every planner that follows them, prefer the lane's way but may still take
 // a short way back (it is a cost, not a rule, and never needed for a valid plan).
-// Open areas: on an axis whose aisles outnumber its open lines in runs of two or more, those runs
-// are open areas, such as the band between a warehouse's shelves and its stations. Travel along
+// Open areas: on an axis whose aisles outnumber its open lines in runs of two or more, the runs
+// beyond its first or last aisle are open areas, such as the band between a warehouse's shelves
+// and its stations at the map's edge (runs between aisles are highways). Travel along
 // the map's length can keep to the aisles; an open area is where robots cross into an aisle or
 // wait at a station, and travel along it crosses all of them. DistTable can make a forward move
 // along an open area dearer (open-cost). An axis without aisles (a random map, a city) has none,

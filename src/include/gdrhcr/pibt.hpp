@@ -171,6 +171,10 @@ class PibtStep {
   static constexpr double kOpStay = 1.25;       // kAuto: see over_operations
   static constexpr double kOpRetry = 0.995;     // kAuto: see over_operations
   static constexpr double kOpPassWeight = 0.1;  // kAuto: weight of the last first pass in its estimate
+  static constexpr double kOpCutScale = 2;      // kAuto: a first pass cut short took at most this times longer
+  // kAuto: the whole first pass estimated from a call's setup and building loop (seconds) that
+  // reached `reached` agents of `fleet` (see first_pass in pibt_operations.cpp).
+  static double first_pass_estimate(double setup, double loop, size_t fleet, size_t reached);
   static constexpr int kDeadlineStride = 64;
 
  private:
