@@ -496,7 +496,7 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
     for (int i : agents)
       preferred[i] = world.rotation() ? guidance_->next_move(i, world.timestep, world.positions[i])
                                       : guidance_->next_cell(i, world.timestep, world.positions[i]);
-    pibt_.set_deadline(budget_.secondary);
+    pibt_.set_deadline(budget_.secondary, budget_.start);
     pibt_.step(world, moves, agents, fixed, &preferred);
     for (int i : agents) {  // how often the guidance foretold the move (it had a cell for it)
       if (preferred[i] == kNoCell) continue;
@@ -504,7 +504,7 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
       if (!follows_guidance(world, i, moves[i], preferred[i])) ++guidance_missed_;
     }
   } else {
-    pibt_.set_deadline(budget_.secondary);
+    pibt_.set_deadline(budget_.secondary, budget_.start);
     pibt_.step(world, moves, agents, fixed);
   }
   for (int i : agents) out[i] = moves[i];

@@ -274,7 +274,7 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   }
   preferred_ = nullptr;
   immovable_ = nullptr;
-  deadline_ = std::chrono::steady_clock::time_point::max();
+  deadline_ = step_start_ = std::chrono::steady_clock::time_point::max();
 }
 
 // Over operations: more than half of this call's agents have stood kStallSteps steps or more (a
@@ -288,7 +288,9 @@ bool PibtStep::stalled() {
 }
 
 // Whether this call plans over operations (see PibtOptions::Rotation): kOperations unless stalled,
-// kAuto when also the deadline leaves the search room (kOpRoom; a call after one over operations
+// kAuto when also the deadline leaves the search room (kOpRoom, measured from the caller's step
+// start when given: what the solves before PIBT take varies with the way, and over cells it left
+// too little to come back to operations on warehouse_large; a call after one over operations
 // stays with them down to kOpStay, so that the way does not change at every step when the room is
 // near the bound). The first pass's time is known from the calls over operations; each call over
 // cells lowers it by kOpRetry, so that operations are tried again now and then (a first call,
@@ -299,8 +301,9 @@ bool PibtStep::over_operations(const WorldView& world) {
   if (!world.rotation() || opt_.rotation == PibtOptions::Rotation::kCells) return false;
   if (opt_.rotation == PibtOptions::Rotation::kAuto) {
     const double room = op_auto_ ? kOpStay : kOpRoom;
+    const Clock::time_point from = step_start_ != Clock::time_point::max() ? step_start_ : Clock::now();
     op_auto_ = deadline_ != Clock::time_point::max() &&
-               std::chrono::duration<double>(deadline_ - Clock::now()).count() >= room * op_pass_s_;
+               std::chrono::duration<double>(deadline_ - from).count() >= room * op_pass_s_;
     if (!op_auto_) {
       op_pass_s_ *= kOpRetry;
       return false;

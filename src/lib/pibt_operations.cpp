@@ -284,13 +284,15 @@ void PibtStep::wait_in_place(const WorldView& world, int ai) {
 // The first pass: the agents built in priority order until the deadline, the rest keeping the
 // operation they hold. Its time since `start` (kAuto; the building loop scaled up to the whole
 // call when the deadline cut it short, the setup before it not) is smoothed over the calls (one
-// slow step should not change the way). A call whose deadline passed before the loop began (a
-// first call's setup sizes the tables for the fleet) measured nothing. A loop cut after a few
-// agents (one long chain of builds) shows that the pass needs more than the time it had, not
-// fleet / reached times more: the scale is at most kOpCutScale (else one such call rules
-// operations out for thousands of steps).
+// slow step should not change the way). A loop cut after a few agents (one long chain of builds)
+// shows that the pass needs more than the time it had, not fleet / reached times more: the scale
+// is at most kOpCutScale (else one such call rules operations out for thousands of steps). A call
+// whose deadline passed before the loop began needs more than its setup: kOpCutScale times it
+// (measuring nothing kept auto over operations at 10 ms on warehouse_large, whose setup alone
+// takes 20-30 ms).
 double PibtStep::first_pass_estimate(double setup, double loop, size_t fleet, size_t reached) {
   if (reached >= fleet) return setup + loop;
+  if (reached == 0) return kOpCutScale * (setup + loop);
   return setup + std::min(loop * static_cast<double>(fleet) / static_cast<double>(reached), kOpCutScale * loop);
 }
 
@@ -308,7 +310,6 @@ void PibtStep::first_pass(const WorldView& world, std::chrono::steady_clock::tim
     if (op_[i].visit != op_round_ && !world.is_immovable(i)) rebuild(world, i, false, map);
   }
   op_score_ += map.score;
-  if (reached == 0) return;  // the deadline had passed before the pass began: nothing to scale up
   using Seconds = std::chrono::duration<double>;
   const double setup = Seconds(loop - start).count(), pass = Seconds(std::chrono::steady_clock::now() - loop).count();
   const double whole = first_pass_estimate(setup, pass, order_.size(), reached);

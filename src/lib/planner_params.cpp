@@ -61,13 +61,14 @@ std::string rule_thousands(const std::string& param, const MapFacts& f, const Pl
 std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerParams&) {
   return !thousands(f) && many_cut_cells(f) ? "8" : "0";
 }
-// Where PIBT plans 3-action operations (EPIBT) in the rotation model, when the step's time
-// allows (auto): fleets filling more than 90% of the free cells, and maps with open areas beside
-// their aisles (lanes.hpp), where a move along an open area costs 2 more (only over operations:
-// PIBT over cells loses with it).
+// Where PIBT plans 3-action operations (EPIBT) in the rotation model when the step's time allows
+// (auto): fleets filling more than 90% of the free cells, and fleets of thousands on maps with
+// open areas beside their aisles (lanes.hpp), where a move along an open area costs 2 more (only
+// over operations: PIBT over cells loses with it).
 std::string rule_operations(const std::string& param, const MapFacts& f, const PlannerParams& earlier) {
   const bool rotation = f.model() == ActionModel::kRotation;
-  if (param == "rotation-pibt") return rotation && (crowded_fleet(f) || f.open_areas()) ? "auto" : "cells";
+  if (param == "rotation-pibt")
+    return rotation && (crowded_fleet(f) || (thousands(f) && f.open_areas())) ? "auto" : "cells";
   return rotation && f.open_areas() && earlier.text("rotation-pibt") != "cells" ? "2" : "0";  // open-cost
 }
 // Fleets filling more than 90% of the free cells: agents wait 500 steps before they set out for a
@@ -130,10 +131,10 @@ const std::vector<ParamRule>& param_rules() {
        "none elsewhere or past 2,000 agents",
        std::string(kRulesFigure) + "motion-forecast", rule_forecast},
       {"operations",
-       "rotation model, fleets holding more than 90% of the free cells and maps with open areas beside their "
-       "aisles (lanes.hpp): PIBT plans over operations when the step budget leaves room for their search, else over "
-       "cells (rotation-pibt auto; elsewhere cells); over operations on a map with open areas a forward move along "
-       "one costs 2 more (open-cost 2; elsewhere 0)",
+       "rotation model, fleets holding more than 90% of the free cells and fleets of more than 2,000 agents on "
+       "maps with open areas beside their aisles (lanes.hpp): PIBT plans over operations when the step budget "
+       "leaves room for their search, else over cells (rotation-pibt auto; elsewhere cells); over operations on a "
+       "map with open areas a forward move along one costs 2 more (open-cost 2; elsewhere 0)",
        std::string(kRulesFigure) + "operations", rule_operations},
       {"crowded-fleet",
        "fleets holding more than 90% of the free cells: agents wait 500 steps before they set out for a dead end "

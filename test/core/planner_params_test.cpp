@@ -153,9 +153,10 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   EXPECT_EQ(crowded("default", less, ActionModel::kRotation), std::tuple("cells", 20, false, 0, 0));
   EXPECT_EQ(crowded("default", full, ActionModel::kMapf), std::tuple("cells", 0, false, 500, past));
   EXPECT_EQ(crowded("paper", full, ActionModel::kRotation), std::tuple("operations", 0, false, 0, 0));
-  // Rule operations: maps with open areas beside their aisles (lanes.hpp) plan over operations in
-  // the rotation model when the budget allows (auto), with a move along an open area 2 dearer; not
-  // over cells (given), not in the mapf model or the paper, not on maps without open areas.
+  // Rule operations: fleets of thousands on maps with open areas beside their aisles (lanes.hpp)
+  // plan over operations in the rotation model when the budget allows (auto), with a move along an
+  // open area 2 dearer; not over cells (given), not below 2,000 agents, not in the mapf model or
+  // the paper, not on maps without open areas.
   const Grid banded = Grid::load(std::string(GDRHCR_SOURCE_DIR) + "/maps/lorr-warehouse-140-500.map");
   auto operations = [&](const Grid& map, const std::string& preset, ActionModel model, const char* way = nullptr) {
     Params p;
@@ -164,6 +165,9 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
     const PlannerParams v = PlannerParams::resolve("gd-rhcr", p, MapFacts(map, 3000, model));
     return std::pair{v.text("rotation-pibt"), v.real("open-cost")};
   };
+  Params none_given;
+  const PlannerParams small = PlannerParams::resolve("gd-rhcr", none_given, MapFacts(banded, 1500, ActionModel::kRotation));
+  EXPECT_EQ(std::pair(small.text("rotation-pibt"), small.real("open-cost")), std::pair(std::string("cells"), 0.0));
   EXPECT_EQ(operations(banded, "default", ActionModel::kRotation), std::pair(std::string("auto"), 2.0));
   EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, "operations"),
             std::pair(std::string("operations"), 2.0));

@@ -313,10 +313,10 @@ TEST(RotationPlanners, AutoPlansOverOperationsOnlyWhenTheDeadlineLeavesRoom) {
 
 TEST(RotationPlanners, AutoIsNotRuledOutByACallWhoseDeadlinePassedBeforeItsFirstPass) {
   // kAuto over 3,000 agents: a call decided over operations whose deadline passes during its setup
-  // (each agent's operations listed) builds nobody, so it measures no first pass (on a fast
-  // machine it may build a few, which scale up to a few seconds at most). The next call, with a
-  // deadline 10 s off, is over operations again (that setup scaled up from no agent, or from one,
-  // would rule operations out for thousands of steps). The deadline is 1 ms off, so on a loaded
+  // (each agent's operations listed) builds nobody, so it counts as twice its setup (on a fast
+  // machine it may build a few: at most twice their loop more). The next call, with a deadline
+  // 10 s off, is over operations again (that setup scaled up from no agent, or from one, would
+  // rule operations out for thousands of steps). The deadline is 1 ms off, so on a loaded
   // machine the call may be decided past it (over cells): tried up to 5 times.
   const Grid g = Grid::from_rows(std::vector<std::string>(80, std::string(80, '.')));
   DistTable dist(g, ActionModel::kRotation);
@@ -351,15 +351,52 @@ TEST(RotationPlanners, AutoIsNotRuledOutByACallWhoseDeadlinePassedBeforeItsFirst
   EXPECT_EQ(pibt.operation_calls(), calls + 1);
 }
 
+TEST(RotationPlanners, AutoWeighsTheFirstPassAgainstTheStepsTimeWhenItsStartIsGiven) {
+  // kAuto over 3,000 agents, its first pass measured with time to spare. A call whose deadline is
+  // now is planned over cells; the same deadline with the caller's step begun 10 s before is over
+  // operations (what the solves before PIBT took does not count against them).
+  const Grid g = Grid::from_rows(std::vector<std::string>(80, std::string(80, '.')));
+  DistTable dist(g, ActionModel::kRotation);
+  PibtOptions o;
+  o.rotation = PibtOptions::Rotation::kAuto;
+  const int n = 3000;
+  PibtStep pibt(g, n, 11, o);
+  std::vector<Cell> pos;
+  std::vector<Heading> heads;
+  std::vector<std::vector<Cell>> goals;
+  for (int i = 0; i < n; ++i) {
+    pos.push_back(g.cell(i % 80, 2 * (i / 80)));
+    heads.push_back(kEast);
+    goals.push_back({g.cell(79 - i % 80, 79 - 2 * (i / 80))});
+  }
+  StepValidator validator(g, ActionModel::kRotation);
+  using Clock = std::chrono::steady_clock;
+  int t = 0;
+  ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads));  // rows; over cells
+  pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
+  ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads));
+  ASSERT_EQ(pibt.operation_calls(), 1);  // measured
+  pibt.set_deadline(Clock::now());
+  ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads));
+  EXPECT_EQ(pibt.operation_calls(), 1);  // no time left: cells
+  const auto now = Clock::now();
+  pibt.set_deadline(now, now - std::chrono::seconds(10));
+  ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads));
+  EXPECT_EQ(pibt.operation_calls(), 2);
+}
+
 TEST(RotationPlanners, AFirstPassCutShortIsEstimatedAtMostTwiceItsLoop) {
   // kAuto's estimate of the whole first pass: a pass that reached every agent took what it took;
   // one the deadline cut is scaled up by fleet / reached, but to at most twice its loop: one long
   // chain of builds at the start (100 of 10,000 agents in 80 ms) must not make it 8 s, which ruled
-  // operations out on warehouse_large for the rest of the run. The setup is never scaled.
+  // operations out on warehouse_large for the rest of the run. The setup is not scaled unless the
+  // pass reached no agent.
   EXPECT_DOUBLE_EQ(PibtStep::first_pass_estimate(0.005, 0.030, 10000, 10000), 0.035);
   EXPECT_DOUBLE_EQ(PibtStep::first_pass_estimate(0.005, 0.080, 10000, 100), 0.005 + 2 * 0.080);
   EXPECT_DOUBLE_EQ(PibtStep::first_pass_estimate(0.005, 0.030, 10000, 8000), 0.005 + 0.030 * 10000 / 8000);
   EXPECT_DOUBLE_EQ(PibtStep::first_pass_estimate(0.010, 0.0, 10000, 1), 0.010);
+  // Cut before its first agent: more than the setup, twice it.
+  EXPECT_DOUBLE_EQ(PibtStep::first_pass_estimate(0.030, 0.0, 10000, 0), 0.060);
 }
 
 TEST(RotationPlanners, OperationsStalledForLongArePlannedOverCells) {

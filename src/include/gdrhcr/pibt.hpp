@@ -154,8 +154,13 @@ class PibtStep {
   // 10,000 agents with turns takes about 10 ms here), and the agents not planned by then step
   // ahead: into the cell they face (mapf: their nearest neighbour) when it is empty, unclaimed and
   // nearer their goal, else they wait; a call over cells that begins past the deadline plans
-  // everyone (its step is over budget anyway). One step only (cleared by step()).
-  void set_deadline(std::chrono::steady_clock::time_point deadline) { deadline_ = deadline; }
+  // everyone (its step is over budget anyway). `step_start`, when given, is when the caller's
+  // step began: kAuto weighs the first pass against the step's time to the deadline rather than
+  // the time left (see over_operations). One step only (cleared by step()).
+  void set_deadline(std::chrono::steady_clock::time_point deadline,
+                    std::chrono::steady_clock::time_point step_start = std::chrono::steady_clock::time_point::max()) {
+    deadline_ = deadline, step_start_ = step_start;
+  }
   long deadline_stops() const { return deadline_stops_; }  // steps stopped so
   long starts() const { return starts_; }            // rotation_starts: PIBT runs made
   long starts_won() const { return starts_won_; }    // ... configurations a shaken run gave
@@ -252,6 +257,7 @@ class PibtStep {
   bool op_auto_ = false;  // kAuto: the last call was planned over operations
   double op_pass_s_ = 0;  // kAuto: the first pass over operations, in seconds, smoothed (see over_operations)
   std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
+  std::chrono::steady_clock::time_point step_start_ = std::chrono::steady_clock::time_point::max();
   long deadline_stops_ = 0;
   void order_candidates(const WorldView& world, int ai, bool pushed, Cell* cand, int m);
   void push_all(const WorldView& world, std::vector<Cell>& next,

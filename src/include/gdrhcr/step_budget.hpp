@@ -19,6 +19,7 @@ struct StepBudget {
   StepBudget() = default;
   StepBudget(Clock::time_point start, double seconds) {
     if (seconds <= 0) return;
+    this->start = start;
     solves = start + share(kSolveShare * seconds);
     refine = start + share(kRefineShare * seconds);
     guidance = start + share(kGuidanceShare * seconds);
@@ -28,6 +29,7 @@ struct StepBudget {
   Clock::time_point refine = Clock::time_point::max();  // the guidance's refinement passes stop here
   Clock::time_point guidance = Clock::time_point::max();
   Clock::time_point secondary = Clock::time_point::max();  // PIBT stops planning agents here
+  Clock::time_point start = Clock::time_point::max();      // the step's start (with a budget)
 
  private:
   static Clock::duration share(double s) {
