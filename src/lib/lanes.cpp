@@ -78,6 +78,13 @@ std::vector<Heading> lines_along(int lines, int len, Free free, Heading first, H
   return dir;
 }
 
+std::vector<char> open_rows(const Grid& grid) {
+  return open_lines(grid.height(), grid.width(), [&](int y, int x) { return grid.is_free(grid.cell(x, y)); });
+}
+std::vector<char> open_cols(const Grid& grid) {
+  return open_lines(grid.width(), grid.height(), [&](int x, int y) { return grid.is_free(grid.cell(x, y)); });
+}
+
 }  // namespace
 
 Lanes derive_lanes(const Grid& grid, LaneStyle style) {
@@ -90,17 +97,12 @@ Lanes derive_lanes(const Grid& grid, LaneStyle style) {
     l.col = lines_along(w, h, col_free, kSouth, kNorth);
     return l;
   }
-  l.row = lanes_along(open_lines(h, w, row_free), kEast, kWest);
-  l.col = lanes_along(open_lines(w, h, col_free), kSouth, kNorth);
+  l.row = lanes_along(open_rows(grid), kEast, kWest);
+  l.col = lanes_along(open_cols(grid), kSouth, kNorth);
   return l;
 }
 
-OpenAreas derive_open_areas(const Grid& grid) {
-  const int w = grid.width(), h = grid.height();
-  auto row_free = [&](int y, int x) { return grid.is_free(grid.cell(x, y)); };
-  auto col_free = [&](int x, int y) { return grid.is_free(grid.cell(x, y)); };
-  return {areas_along(open_lines(h, w, row_free)), areas_along(open_lines(w, h, col_free))};
-}
+OpenAreas derive_open_areas(const Grid& grid) { return {areas_along(open_rows(grid)), areas_along(open_cols(grid))}; }
 
 bool OpenAreas::along(const Grid& grid, Cell c, Heading h) const {
   return h == kEast || h == kWest ? row[grid.y_of(c)] : col[grid.x_of(c)];

@@ -204,7 +204,7 @@ std::vector<ParamSpec> pibt_rows() {
           choice("rotation-pibt", {"operations", "cells", "auto"}, "",
                  "rotation model: PIBT over 3-action operations carried on between steps (EPIBT; with a step "
                  "budget its LNS spends the rest), over cells chosen with turns counted and executed turning first, "
-                 "or (auto) over operations when the time left to the step's deadline is " +
+                 "or (auto) over operations when the step's time to its deadline is " +
                      fmt_number(PibtStep::kOpRoom) + " times their first pass (room for the search), else over cells",
                  "operations", "operations"),
           integer("rotation-swap-wait", 0, 1000, "",

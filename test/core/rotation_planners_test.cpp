@@ -228,6 +228,32 @@ bool pibt_rotation_step(PibtStep& pibt, const Grid& g, const DistTable& dist, St
   pos = next, heads = next_heads;
   return !bad;
 }
+// kAuto over 3,000 agents on an open 80 x 80 map, every other row full, each bound for the
+// mirrored cell; step() plans and validates one step.
+struct AutoCrowd {
+  static constexpr int kAgents = 3000;
+  Grid g = Grid::from_rows(std::vector<std::string>(80, std::string(80, '.')));
+  DistTable dist{g, ActionModel::kRotation};
+  PibtStep pibt{g, kAgents, 11, options()};
+  StepValidator validator{g, ActionModel::kRotation};
+  std::vector<Cell> pos;
+  std::vector<Heading> heads;
+  std::vector<std::vector<Cell>> goals;
+  int t = 0;
+  AutoCrowd() {
+    for (int i = 0; i < kAgents; ++i) {
+      pos.push_back(g.cell(i % 80, 2 * (i / 80)));
+      heads.push_back(kEast);
+      goals.push_back({g.cell(79 - i % 80, 79 - 2 * (i / 80))});
+    }
+  }
+  static PibtOptions options() {
+    PibtOptions o;
+    o.rotation = PibtOptions::Rotation::kAuto;
+    return o;
+  }
+  bool step() { return pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads); }
+};
 }  // namespace
 
 TEST(RotationPlanners, AnOperationIsCarriedOnWhenTheNextStepHasNoTime) {
@@ -318,71 +344,41 @@ TEST(RotationPlanners, AutoIsNotRuledOutByACallWhoseDeadlinePassedBeforeItsFirst
   // 10 s off, is over operations again (that setup scaled up from no agent, or from one, would
   // rule operations out for thousands of steps). The deadline is 1 ms off, so on a loaded
   // machine the call may be decided past it (over cells): tried up to 5 times.
-  const Grid g = Grid::from_rows(std::vector<std::string>(80, std::string(80, '.')));
-  DistTable dist(g, ActionModel::kRotation);
-  PibtOptions o;
-  o.rotation = PibtOptions::Rotation::kAuto;
-  const int n = 3000;
-  PibtStep pibt(g, n, 11, o);
-  std::vector<Cell> pos;
-  std::vector<Heading> heads;
-  std::vector<std::vector<Cell>> goals;
-  for (int i = 0; i < n; ++i) {
-    pos.push_back(g.cell(i % 80, 2 * (i / 80)));
-    heads.push_back(kEast);
-    goals.push_back({g.cell(79 - i % 80, 79 - 2 * (i / 80))});
-  }
-  StepValidator validator(g, ActionModel::kRotation);
+  AutoCrowd c;
   using Clock = std::chrono::steady_clock;
-  int t = 0;
-  ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads));  // rows; over cells
-  ASSERT_EQ(pibt.operation_calls(), 0);
+  ASSERT_TRUE(c.step());  // rows; over cells
+  ASSERT_EQ(c.pibt.operation_calls(), 0);
   bool cut = false;  // a call over operations stopped by its deadline
   for (int attempt = 0; attempt < 5 && !cut; ++attempt) {
-    const long calls = pibt.operation_calls(), stops = pibt.deadline_stops();
-    pibt.set_deadline(Clock::now() + std::chrono::milliseconds(1));
-    ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads));
-    cut = pibt.operation_calls() > calls && pibt.deadline_stops() > stops;
+    const long calls = c.pibt.operation_calls(), stops = c.pibt.deadline_stops();
+    c.pibt.set_deadline(Clock::now() + std::chrono::milliseconds(1));
+    ASSERT_TRUE(c.step());
+    cut = c.pibt.operation_calls() > calls && c.pibt.deadline_stops() > stops;
   }
   ASSERT_TRUE(cut) << "no call was decided over operations before its deadline";
-  const long calls = pibt.operation_calls();
-  pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
-  ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads));
-  EXPECT_EQ(pibt.operation_calls(), calls + 1);
+  const long calls = c.pibt.operation_calls();
+  c.pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
+  ASSERT_TRUE(c.step());
+  EXPECT_EQ(c.pibt.operation_calls(), calls + 1);
 }
 
 TEST(RotationPlanners, AutoWeighsTheFirstPassAgainstTheStepsTimeWhenItsStartIsGiven) {
   // kAuto over 3,000 agents, its first pass measured with time to spare. A call whose deadline is
   // now is planned over cells; the same deadline with the caller's step begun 10 s before is over
   // operations (what the solves before PIBT took does not count against them).
-  const Grid g = Grid::from_rows(std::vector<std::string>(80, std::string(80, '.')));
-  DistTable dist(g, ActionModel::kRotation);
-  PibtOptions o;
-  o.rotation = PibtOptions::Rotation::kAuto;
-  const int n = 3000;
-  PibtStep pibt(g, n, 11, o);
-  std::vector<Cell> pos;
-  std::vector<Heading> heads;
-  std::vector<std::vector<Cell>> goals;
-  for (int i = 0; i < n; ++i) {
-    pos.push_back(g.cell(i % 80, 2 * (i / 80)));
-    heads.push_back(kEast);
-    goals.push_back({g.cell(79 - i % 80, 79 - 2 * (i / 80))});
-  }
-  StepValidator validator(g, ActionModel::kRotation);
+  AutoCrowd c;
   using Clock = std::chrono::steady_clock;
-  int t = 0;
-  ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads));  // rows; over cells
-  pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
-  ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads));
-  ASSERT_EQ(pibt.operation_calls(), 1);  // measured
-  pibt.set_deadline(Clock::now());
-  ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads));
-  EXPECT_EQ(pibt.operation_calls(), 1);  // no time left: cells
+  ASSERT_TRUE(c.step());  // rows; over cells
+  c.pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
+  ASSERT_TRUE(c.step());
+  ASSERT_EQ(c.pibt.operation_calls(), 1);  // measured
+  c.pibt.set_deadline(Clock::now());
+  ASSERT_TRUE(c.step());
+  EXPECT_EQ(c.pibt.operation_calls(), 1);  // no time left: cells
   const auto now = Clock::now();
-  pibt.set_deadline(now, now - std::chrono::seconds(10));
-  ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads));
-  EXPECT_EQ(pibt.operation_calls(), 2);
+  c.pibt.set_deadline(now, now - std::chrono::seconds(10));
+  ASSERT_TRUE(c.step());
+  EXPECT_EQ(c.pibt.operation_calls(), 2);
 }
 
 TEST(RotationPlanners, AFirstPassCutShortIsEstimatedAtMostTwiceItsLoop) {

@@ -63,7 +63,8 @@ struct PibtOptions {
   // forward, one that does not turns towards it and stays, and whoever was to enter a staying
   // agent's cell stays too (rotation_actions_for_step, mapf_in_rotation.hpp). One push per agent,
   // so its time is linear in the agents, as in the mapf model. kAuto plans a call over operations
-  // when the time left to its deadline is kOpRoom times what the first pass over operations takes
+  // when the time to its deadline (from the caller's step start if given, see set_deadline; else
+  // the time left) is kOpRoom times what the first pass over operations takes
   // (so the search has room), else over cells: without a deadline, or at small budgets, operations
   // do worse than cells in packed crowds (docs/results.md, session 36).
   enum class Rotation { kOperations, kCells, kAuto };
