@@ -61,15 +61,28 @@ std::string rule_thousands(const std::string& param, const MapFacts& f, const Pl
 std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerParams&) {
   return !thousands(f) && many_cut_cells(f) ? "8" : "0";
 }
+// The step budget per agent from which auto is expected to plan over operations (it asks for
+// PibtStep::kOpRoom times their first pass before PIBT's deadline). On warehouse_large's 10,000
+// agents it planned over operations at 96% of the steps with 10 us an agent, at 7% with 8 us
+// (docs/results.md, "Session 42").
+constexpr double kOperationsBudgetPerAgent = 9e-6;  // seconds
+// Whether PIBT is expected to plan over operations: asked for, or auto with a step budget that
+// leaves room for them (without one auto plans over cells).
+bool operations_expected(const MapFacts& f, const PlannerParams& earlier) {
+  const std::string& way = earlier.text("rotation-pibt");
+  if (way != "auto") return way == "operations";
+  const double budget = earlier.has("step-budget") ? earlier.real("step-budget") : 0;
+  return budget > 0 && budget >= kOperationsBudgetPerAgent * f.num_agents();
+}
 // Where PIBT plans 3-action operations (EPIBT) in the rotation model when the step's time allows
 // (auto): fleets filling more than 90% of the free cells, and fleets of thousands on maps with
-// open areas beside their aisles (lanes.hpp), where a move along an open area costs 2 more (only
-// over operations: PIBT over cells loses with it).
+// open areas beside their aisles (lanes.hpp), where a move along an open area costs 2 more when
+// operations are expected (PIBT over cells loses with it).
 std::string rule_operations(const std::string& param, const MapFacts& f, const PlannerParams& earlier) {
   const bool rotation = f.model() == ActionModel::kRotation;
   if (param == "rotation-pibt")
     return rotation && (crowded_fleet(f) || (thousands(f) && f.open_areas())) ? "auto" : "cells";
-  return rotation && f.open_areas() && earlier.text("rotation-pibt") != "cells" ? "2" : "0";  // open-cost
+  return rotation && f.open_areas() && operations_expected(f, earlier) ? "2" : "0";  // open-cost
 }
 // Fleets filling more than 90% of the free cells: agents wait 500 steps before they set out for a
 // dead end, and longer while no more wait than the fleet has agents beyond 90% of the free cells;
@@ -133,8 +146,9 @@ const std::vector<ParamRule>& param_rules() {
       {"operations",
        "rotation model, fleets holding more than 90% of the free cells and fleets of more than 2,000 agents on "
        "maps with open areas beside their aisles (lanes.hpp): PIBT plans over operations when the step budget "
-       "leaves room for their search, else over cells (rotation-pibt auto; elsewhere cells); over operations on a "
-       "map with open areas a forward move along one costs 2 more (open-cost 2; elsewhere 0)",
+       "leaves room for their search, else over cells (rotation-pibt auto; elsewhere cells); where operations are "
+       "expected (given, or auto with a step budget of at least 9 us an agent) on a map with open areas a forward "
+       "move along one costs 2 more (open-cost 2; elsewhere 0: over cells it loses)",
        std::string(kRulesFigure) + "operations", rule_operations},
       {"crowded-fleet",
        "fleets holding more than 90% of the free cells: agents wait 500 steps before they set out for a dead end "
