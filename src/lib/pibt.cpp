@@ -288,11 +288,11 @@ bool PibtStep::stalled() {
 }
 
 // Whether this call plans over operations (see PibtOptions::Rotation): kOperations unless stalled,
-// kAuto when also the deadline leaves them room (rotation_room times their first pass, measured
-// from the caller's step start when given: what the solves before PIBT take varies with the way,
-// and over cells it left too little to come back to operations on warehouse_large; a call after
-// one over operations stays with them down to kOpStay of that room, so that the way does not
-// change at every step when the room is near the bound). The first pass's time is known from the calls over operations; each call over
+// kAuto when also the deadline leaves the search room (kOpRoom, measured from the caller's step
+// start when given: what the solves before PIBT take varies with the way, and over cells it left
+// too little to come back to operations on warehouse_large; a call after one over operations
+// stays with them down to kOpStay, so that the way does not change at every step when the room is
+// near the bound). The first pass's time is known from the calls over operations; each call over
 // cells lowers it by kOpRetry, so that operations are tried again now and then (a first call,
 // computing rows, or a slow step does not rule them out for good; a change of way costs the fleet
 // a step or two, so seldom).
@@ -300,7 +300,7 @@ bool PibtStep::over_operations(const WorldView& world) {
   using Clock = std::chrono::steady_clock;
   if (!world.rotation() || opt_.rotation == PibtOptions::Rotation::kCells) return false;
   if (opt_.rotation == PibtOptions::Rotation::kAuto) {
-    const double room = op_auto_ ? kOpStay * opt_.rotation_room : opt_.rotation_room;
+    const double room = op_auto_ ? kOpStay : kOpRoom;
     const Clock::time_point from = step_start_ != Clock::time_point::max() ? step_start_ : Clock::now();
     op_auto_ = deadline_ != Clock::time_point::max() &&
                std::chrono::duration<double>(deadline_ - from).count() >= room * op_pass_s_;

@@ -61,30 +61,27 @@ std::string rule_thousands(const std::string& param, const MapFacts& f, const Pl
 std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerParams&) {
   return !thousands(f) && many_cut_cells(f) ? "8" : "0";
 }
-// The first pass over operations per agent, and the share of the step budget before PIBT's
-// deadline: auto plans over operations when rotation-room times the pass fits before it. On
-// warehouse_large's 10,000 agents (room 1.5) it planned over operations at 96% of the steps with
-// 10 us of budget an agent, at 7% with 8 us (docs/results.md, "Session 42").
-constexpr double kFirstPassPerAgent = 5.5e-6;  // seconds
-constexpr double kPibtShare = 0.95;
+// The step budget per agent from which auto is expected to plan over operations (it asks for
+// PibtStep::kOpRoom times their first pass before PIBT's deadline). On warehouse_large's 10,000
+// agents it planned over operations at 96% of the steps with 10 us an agent, at 7% with 8 us
+// (docs/results.md, "Session 42").
+constexpr double kOperationsBudgetPerAgent = 9e-6;  // seconds
 // Whether PIBT is expected to plan over operations: asked for, or auto with a step budget that
-// leaves them room (without one auto plans over cells).
+// leaves room for them (without one auto plans over cells).
 bool operations_expected(const MapFacts& f, const PlannerParams& earlier) {
   const std::string& way = earlier.text("rotation-pibt");
   if (way != "auto") return way == "operations";
   const double budget = earlier.has("step-budget") ? earlier.real("step-budget") : 0;
-  return budget > 0 && kPibtShare * budget >= earlier.real("rotation-room") * kFirstPassPerAgent * f.num_agents();
+  return budget > 0 && budget >= kOperationsBudgetPerAgent * f.num_agents();
 }
 // Where PIBT plans 3-action operations (EPIBT) in the rotation model when the step's time allows
-// (auto): fleets filling more than 90% of the free cells, with room for the search (1.5 times the
-// first pass: their first pass alone does worse than cells), and fleets of thousands on maps with
-// open areas beside their aisles (lanes.hpp), as soon as the first pass fits (room 1), where a
-// move along an open area costs 2 more when operations are expected (over cells it loses).
+// (auto): fleets filling more than 90% of the free cells, and fleets of thousands on maps with
+// open areas beside their aisles (lanes.hpp), where a move along an open area costs 2 more when
+// operations are expected (PIBT over cells loses with it).
 std::string rule_operations(const std::string& param, const MapFacts& f, const PlannerParams& earlier) {
   const bool rotation = f.model() == ActionModel::kRotation;
-  const bool open_thousands = rotation && !crowded_fleet(f) && thousands(f) && f.open_areas();
-  if (param == "rotation-pibt") return rotation && (crowded_fleet(f) || open_thousands) ? "auto" : "cells";
-  if (param == "rotation-room") return open_thousands ? "1" : "1.5";
+  if (param == "rotation-pibt")
+    return rotation && (crowded_fleet(f) || (thousands(f) && f.open_areas())) ? "auto" : "cells";
   return rotation && f.open_areas() && operations_expected(f, earlier) ? "2" : "0";  // open-cost
 }
 // Fleets filling more than 90% of the free cells: agents wait 500 steps before they set out for a
@@ -148,11 +145,10 @@ const std::vector<ParamRule>& param_rules() {
        std::string(kRulesFigure) + "motion-forecast", rule_forecast},
       {"operations",
        "rotation model, fleets holding more than 90% of the free cells and fleets of more than 2,000 agents on "
-       "maps with open areas beside their aisles (lanes.hpp): PIBT plans over operations when the step's time "
-       "leaves room for them, else over cells (rotation-pibt auto; elsewhere cells): crowded fleets 1.5 first "
-       "passes (room for the search), the others one (rotation-room 1.5, 1); where operations are expected (given, "
-       "or auto with 95% of the step budget at least rotation-room times 5.5 us an agent) on a map with open areas "
-       "a forward move along one costs 2 more (open-cost 2; elsewhere 0: over cells it loses)",
+       "maps with open areas beside their aisles (lanes.hpp): PIBT plans over operations when the step budget "
+       "leaves room for their search, else over cells (rotation-pibt auto; elsewhere cells); where operations are "
+       "expected (given, or auto with a step budget of at least 9 us an agent) on a map with open areas a forward "
+       "move along one costs 2 more (open-cost 2; elsewhere 0: over cells it loses)",
        std::string(kRulesFigure) + "operations", rule_operations},
       {"crowded-fleet",
        "fleets holding more than 90% of the free cells: agents wait 500 steps before they set out for a dead end "
@@ -222,13 +218,9 @@ std::vector<ParamSpec> pibt_rows() {
           choice("rotation-pibt", {"operations", "cells", "auto"}, "",
                  "rotation model: PIBT over 3-action operations carried on between steps (EPIBT; with a step "
                  "budget its LNS spends the rest), over cells chosen with turns counted and executed turning first, "
-                 "or (auto) over operations when the step's time to its deadline is rotation-room times their "
-                 "first pass, else over cells",
+                 "or (auto) over operations when the step's time to its deadline is " +
+                     fmt_number(PibtStep::kOpRoom) + " times their first pass (room for the search), else over cells",
                  "operations", "operations"),
-          real("rotation-room", 1, 8, "",
-               "rotation model, auto: the step's time to PIBT's deadline, in first passes over operations, from "
-               "which it plans over operations (above 1: room for their search)",
-               "operations", "1.5"),
           integer("rotation-swap-wait", 0, 1000, "",
                   "rotation model: the swap applies to an agent that has stood in its cell this many steps (0 = never)",
                   "crowded-fleet", "0"),

@@ -24,7 +24,6 @@ PibtOptions pibt_options(const PlannerParams& v) {
   o.rotation = rotation == "cells"  ? PibtOptions::Rotation::kCells
                : rotation == "auto" ? PibtOptions::Rotation::kAuto
                                     : PibtOptions::Rotation::kOperations;
-  o.rotation_room = v.real("rotation-room");
   o.rotation_swap_wait = v.integer("rotation-swap-wait");
   o.rotation_commit = v.flag("rotation-commit");
   o.rotation_starts = v.integer("rotation-starts");

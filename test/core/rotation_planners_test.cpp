@@ -232,25 +232,24 @@ bool pibt_rotation_step(PibtStep& pibt, const Grid& g, const DistTable& dist, St
 // mirrored cell; step() plans and validates one step.
 struct AutoCrowd {
   static constexpr int kAgents = 3000;
-  explicit AutoCrowd(double room = 1.5) : pibt{g, kAgents, 11, options(room)} {
+  Grid g = Grid::from_rows(std::vector<std::string>(80, std::string(80, '.')));
+  DistTable dist{g, ActionModel::kRotation};
+  PibtStep pibt{g, kAgents, 11, options()};
+  StepValidator validator{g, ActionModel::kRotation};
+  std::vector<Cell> pos;
+  std::vector<Heading> heads;
+  std::vector<std::vector<Cell>> goals;
+  int t = 0;
+  AutoCrowd() {
     for (int i = 0; i < kAgents; ++i) {
       pos.push_back(g.cell(i % 80, 2 * (i / 80)));
       heads.push_back(kEast);
       goals.push_back({g.cell(79 - i % 80, 79 - 2 * (i / 80))});
     }
   }
-  Grid g = Grid::from_rows(std::vector<std::string>(80, std::string(80, '.')));
-  DistTable dist{g, ActionModel::kRotation};
-  PibtStep pibt;
-  StepValidator validator{g, ActionModel::kRotation};
-  std::vector<Cell> pos;
-  std::vector<Heading> heads;
-  std::vector<std::vector<Cell>> goals;
-  int t = 0;
-  static PibtOptions options(double room) {
+  static PibtOptions options() {
     PibtOptions o;
     o.rotation = PibtOptions::Rotation::kAuto;
-    o.rotation_room = room;
     return o;
   }
   bool step() { return pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads); }
@@ -380,28 +379,6 @@ TEST(RotationPlanners, AutoWeighsTheFirstPassAgainstTheStepsTimeWhenItsStartIsGi
   c.pibt.set_deadline(now, now - std::chrono::seconds(10));
   ASSERT_TRUE(c.step());
   EXPECT_EQ(c.pibt.operation_calls(), 2);
-}
-
-TEST(RotationPlanners, AutoAsksForRotationRoomTimesTheFirstPass) {
-  // kAuto over 3,000 agents, its first pass measured with time to spare. A step whose time to
-  // PIBT's deadline is 1.2 first passes is over operations with rotation-room 1, over cells with
-  // 1.5 (room for the search).
-  using Clock = std::chrono::steady_clock;
-  auto calls = [](double room) {
-    AutoCrowd c(room);
-    EXPECT_TRUE(c.step());  // rows; over cells
-    c.pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
-    EXPECT_TRUE(c.step());
-    EXPECT_GT(c.pibt.first_pass_s(), 0);
-    const auto start = Clock::now();
-    const auto room_12 = std::chrono::duration_cast<Clock::duration>(
-        std::chrono::duration<double>(1.2 * c.pibt.first_pass_s()));
-    c.pibt.set_deadline(start + room_12, start);
-    EXPECT_TRUE(c.step());
-    return c.pibt.operation_calls();
-  };
-  EXPECT_EQ(calls(1.0), 2);
-  EXPECT_EQ(calls(1.5), 1);
 }
 
 TEST(RotationPlanners, AFirstPassCutShortIsEstimatedAtMostTwiceItsLoop) {

@@ -64,12 +64,11 @@ struct PibtOptions {
   // agent's cell stays too (rotation_actions_for_step, mapf_in_rotation.hpp). One push per agent,
   // so its time is linear in the agents, as in the mapf model. kAuto plans a call over operations
   // when the time to its deadline (from the caller's step start if given, see set_deadline; else
-  // the time left) is rotation_room times what the first pass over operations takes
-  // (more than 1: the search has room), else over cells: without a deadline, or at small budgets,
-  // operations do worse than cells in packed crowds (docs/results.md, session 36).
+  // the time left) is kOpRoom times what the first pass over operations takes
+  // (so the search has room), else over cells: without a deadline, or at small budgets, operations
+  // do worse than cells in packed crowds (docs/results.md, session 36).
   enum class Rotation { kOperations, kCells, kAuto };
   Rotation rotation = Rotation::kOperations;
-  double rotation_room = 1.5;
   static const char* name(Rotation r) { return r == Rotation::kCells ? "cells" : r == Rotation::kAuto ? "auto" : "operations"; }
   // Rotation model: the swap starts only for an agent that has stood in its cell this many steps
   // (0: never), and goes on while its partner still needs it (over operations: it retreats). Used
@@ -170,12 +169,12 @@ class PibtStep {
   long zoned_rounds() const { return op_zoned_rounds_; }   // ... of them in two zones at once
   long stalls() const { return stalls_; }  // operations: calls planned over cells (stalled)
   long operation_calls() const { return op_calls_; }  // rotation model: calls planned over operations
-  double first_pass_s() const { return op_pass_s_; }  // kAuto: the first pass's estimate (0 before one)
   static constexpr int kStartBox = 4;
   static constexpr double kStartNoise = 5.0;
   static constexpr int kOpSteps = 3;  // actions per operation in the rotation model
   static constexpr int kStallSteps = 20;  // operations: see stalled()
-  static constexpr double kOpStay = 5.0 / 6;    // kAuto: see over_operations (of rotation_room; 1.25 of 1.5)
+  static constexpr double kOpRoom = 1.5;        // kAuto: see Rotation
+  static constexpr double kOpStay = 1.25;       // kAuto: see over_operations
   static constexpr double kOpRetry = 0.995;     // kAuto: see over_operations
   static constexpr double kOpPassWeight = 0.1;  // kAuto: weight of the last first pass in its estimate
   static constexpr double kOpCutScale = 2;      // kAuto: a first pass cut short took at most this times longer
