@@ -112,8 +112,7 @@ std::string rule_window(const std::string&, const MapFacts& f, const PlannerPara
 std::string rule_lanes(const std::string& param, const MapFacts& f, const PlannerParams&) {
   if (param == "lanes")
     return f.model() == ActionModel::kRotation && (thousands(f) || crowded_fleet(f)) ? "lines" : "aisles";
-  if (f.model() != ActionModel::kRotation) return "0";
-  return thousands(f) && !crowded_fleet(f) ? "3" : "2";  // lane-cost
+  return f.model() == ActionModel::kRotation ? "2" : "0";
 }
 // The anytime windowed LNS (window_lns.hpp) in the rotation model where the fleet leaves room to
 // go round: at most 30% of the free cells. Denser, single-agent replanning among the others' paths
@@ -168,10 +167,9 @@ const std::vector<ParamRule>& param_rules() {
        "else 20",
        std::string(kRulesFigure) + "guidance-window", rule_window},
       {"lanes",
-       "rotation model: a forward move against a one-way lane costs 2 more (lane-cost 2; lanes.hpp), for fleets of "
-       "more than 2,000 agents holding at most 90% of the free cells 3 more; the lanes are the map's one-cell "
-       "aisles, and for fleets of more than 2,000 agents or holding more than 90% of the free cells every row and "
-       "column one can travel along (lanes lines); mapf model: none",
+       "rotation model: a forward move against a one-way lane costs 2 more (lane-cost 2; lanes.hpp); the lanes are "
+       "the map's one-cell aisles, and for fleets of more than 2,000 agents or holding more than 90% of the free "
+       "cells every row and column one can travel along (lanes lines); mapf model: none",
        std::string(kRulesFigure) + "lanes", rule_lanes},
       {"anytime-lns",
        "rotation model, fleets holding at most 30% of the free cells: the rest of the step budget improves a "

@@ -99,15 +99,6 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
     return std::pair{v.text("lanes"), step_costs(v, ActionModel::kRotation).lane_style == LaneStyle::kLines};
   };
   EXPECT_EQ(lines("default", 400), std::pair(std::string("aisles"), false));
-  // A fleet of thousands (not crowded) pays 3 against a lane.
-  auto lane_cost = [&](const std::string& preset, const Grid& map, int agents) {
-    Params p;
-    p.set("preset", preset);
-    return PlannerParams::resolve("gd-rhcr", p, MapFacts(map, agents, ActionModel::kRotation)).real("lane-cost");
-  };
-  EXPECT_EQ(lane_cost("default", warehouse, 2000), 2.0);
-  EXPECT_EQ(lane_cost("default", warehouse, 2500), 3.0);
-  EXPECT_EQ(lane_cost("paper", warehouse, 2500), 0.0);
   EXPECT_EQ(lines("default", 2500), std::pair(std::string("lines"), true));
   EXPECT_EQ(lines("paper", 2500), std::pair(std::string("aisles"), false));
   // A map without aisles gets them too, for a fleet of thousands in the rotation model only.
