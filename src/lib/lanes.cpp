@@ -78,23 +78,24 @@ std::vector<Heading> lines_along(int lines, int len, Free free, Heading first, H
   return dir;
 }
 
-std::vector<char> open_rows(const Grid& grid) {
-  return open_lines(grid.height(), grid.width(), [&](int y, int x) { return grid.is_free(grid.cell(x, y)); });
+// Whether a cell is free, by line and position along it: rows (y, x) and columns (x, y).
+auto row_free(const Grid& grid) {
+  return [&grid](int y, int x) { return grid.is_free(grid.cell(x, y)); };
 }
-std::vector<char> open_cols(const Grid& grid) {
-  return open_lines(grid.width(), grid.height(), [&](int x, int y) { return grid.is_free(grid.cell(x, y)); });
+auto col_free(const Grid& grid) {
+  return [&grid](int x, int y) { return grid.is_free(grid.cell(x, y)); };
 }
+std::vector<char> open_rows(const Grid& grid) { return open_lines(grid.height(), grid.width(), row_free(grid)); }
+std::vector<char> open_cols(const Grid& grid) { return open_lines(grid.width(), grid.height(), col_free(grid)); }
 
 }  // namespace
 
 Lanes derive_lanes(const Grid& grid, LaneStyle style) {
   const int w = grid.width(), h = grid.height();
   Lanes l;
-  auto row_free = [&](int y, int x) { return grid.is_free(grid.cell(x, y)); };
-  auto col_free = [&](int x, int y) { return grid.is_free(grid.cell(x, y)); };
   if (style == LaneStyle::kLines) {
-    l.row = lines_along(h, w, row_free, kEast, kWest);
-    l.col = lines_along(w, h, col_free, kSouth, kNorth);
+    l.row = lines_along(h, w, row_free(grid), kEast, kWest);
+    l.col = lines_along(w, h, col_free(grid), kSouth, kNorth);
     return l;
   }
   l.row = lanes_along(open_rows(grid), kEast, kWest);
