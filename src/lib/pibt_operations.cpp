@@ -313,7 +313,7 @@ void PibtStep::first_pass(const WorldView& world, std::chrono::steady_clock::tim
   using Seconds = std::chrono::duration<double>;
   const double setup = Seconds(loop - start).count(), pass = Seconds(std::chrono::steady_clock::now() - loop).count();
   const double whole = first_pass_estimate(setup, pass, order_.size(), reached);
-  op_pass_s_ = op_pass_s_ > 0 ? op_pass_s_ + kOpPassWeight * (whole - op_pass_s_) : whole;
+  if (!op_cold_) op_pass_s_ = op_pass_s_ > 0 ? op_pass_s_ + kOpPassWeight * (whole - op_pass_s_) : whole;
 }
 
 // One round of the search in zone z: its agents rebuilt in random order, each change kept when

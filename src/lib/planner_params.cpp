@@ -63,9 +63,10 @@ std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerPa
 }
 // The step budget per agent from which auto is expected to plan over operations (it asks for
 // PibtStep::kOpRoom times their first pass before PIBT's deadline). On warehouse_large's 10,000
-// agents it planned over operations at 96% of the steps with 10 us an agent, at 7% with 8 us
-// (docs/results.md, "Session 42").
-constexpr double kOperationsBudgetPerAgent = 9e-6;  // seconds
+// agents, every row computed beforehand as in the Start-Kit and the windowed LNS off (rule
+// anytime-lns), it planned over operations at every step with 6 and 7 us an agent
+// (docs/results.md, "Session 43"); 7 leaves a margin for a slower first pass.
+constexpr double kOperationsBudgetPerAgent = 7e-6;  // seconds
 // Whether PIBT is expected to plan over operations: asked for, or auto with a step budget that
 // leaves room for them (without one auto plans over cells).
 bool operations_expected(const MapFacts& f, const PlannerParams& earlier) {
@@ -117,10 +118,13 @@ std::string rule_lanes(const std::string& param, const MapFacts& f, const Planne
 // The anytime windowed LNS (window_lns.hpp) in the rotation model where the fleet leaves room to
 // go round: at most 30% of the free cells. Denser, single-agent replanning among the others' paths
 // mostly fails, and the plans it does change turn agents back and forth from step to step
-// (docs/results.md, "The product default's rules").
+// (docs/results.md, "The product default's rules"). Not where PIBT is expected to plan over
+// operations: their own search spends the rest of the budget, and the LNS's share of it (the
+// planner beneath gets half) left auto too little room for them (docs/results.md, "Session 43").
 constexpr double kLnsFleetShare = 0.3;
-std::string rule_lns(const std::string&, const MapFacts& f, const PlannerParams&) {
-  return f.model() == ActionModel::kRotation && f.fleet_share() <= kLnsFleetShare ? "10" : "0";
+std::string rule_lns(const std::string&, const MapFacts& f, const PlannerParams& earlier) {
+  const bool room = f.model() == ActionModel::kRotation && f.fleet_share() <= kLnsFleetShare;
+  return room && !operations_expected(f, earlier) ? "10" : "0";
 }
 std::string rule_far_cost(const std::string&, const MapFacts&, const PlannerParams& earlier) {
   const bool forecast = earlier.text("guidance") == "local" && earlier.integer("lg-forecast") >= 2;
@@ -147,7 +151,7 @@ const std::vector<ParamRule>& param_rules() {
        "rotation model, fleets holding more than 90% of the free cells and fleets of more than 2,000 agents on "
        "maps with open areas beside their aisles (lanes.hpp): PIBT plans over operations when the step budget "
        "leaves room for their search, else over cells (rotation-pibt auto; elsewhere cells); where operations are "
-       "expected (given, or auto with a step budget of at least 9 us an agent) on a map with open areas a forward "
+       "expected (given, or auto with a step budget of at least 7 us an agent) on a map with open areas a forward "
        "move along one costs 2 more (open-cost 2; elsewhere 0: over cells it loses)",
        std::string(kRulesFigure) + "operations", rule_operations},
       {"crowded-fleet",
@@ -172,8 +176,9 @@ const std::vector<ParamRule>& param_rules() {
        "cells every row and column one can travel along (lanes lines); mapf model: none",
        std::string(kRulesFigure) + "lanes", rule_lanes},
       {"anytime-lns",
-       "rotation model, fleets holding at most 30% of the free cells: the rest of the step budget improves a "
-       "10-step joint plan by LNS (lns-window 10); elsewhere off (0)",
+       "rotation model, fleets holding at most 30% of the free cells, unless PIBT is expected to plan over operations "
+       "(rule operations; their search spends the rest): the rest of the step budget improves a 10-step joint plan "
+       "by LNS (lns-window 10); elsewhere off (0)",
        std::string(kRulesFigure) + "anytime-lns", rule_lns},
       {"far-cost", "where the motion forecast runs, conflicts lg-near-steps or more ahead cost 2; else as lg-cost (-1)",
        std::string(kRulesFigure) + "far-cost", rule_far_cost},
@@ -333,13 +338,14 @@ std::vector<ParamSpec> gd_rhcr_table() {
            "groups with more than this share of the free cells around them occupied go to the secondary solver", "",
            "1"),
       integer("density-margin", 0, 1 << 20, "4", "cells around a group's bounding box counted for max-density"),
-      integer("lns-window", 0, 1000, "",
-              "steps of the joint plan the rest of the step budget improves by LNS (0 = off; window_lns.hpp)",
-              "anytime-lns", "0"),
-      integer("lns-neighbours", 1, 1000, "8", "agents an LNS neighbourhood plans again together"),
-      integer("lns-iterations", 0, 1000000, "0", "LNS neighbourhoods per step (0 = until the step budget)"),
   };
   for (auto& r : pibt_rows()) t.push_back(r);
+  // After PIBT's rows: rule anytime-lns reads the way PIBT plans.
+  t.push_back(integer("lns-window", 0, 1000, "",
+                      "steps of the joint plan the rest of the step budget improves by LNS (0 = off; window_lns.hpp)",
+                      "anytime-lns", "0"));
+  t.push_back(integer("lns-neighbours", 1, 1000, "8", "agents an LNS neighbourhood plans again together"));
+  t.push_back(integer("lns-iterations", 0, 1000000, "0", "LNS neighbourhoods per step (0 = until the step budget)"));
   for (auto& r : guidance_rows(true, "local")) t.push_back(r);
   for (auto& r : t) {
     if (r.name == "lg-contraflow") r.value = "0.1", r.paper = "0";

@@ -155,9 +155,10 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   EXPECT_EQ(crowded("paper", full, ActionModel::kRotation), std::tuple("operations", 0, false, 0, 0));
   // Rule operations: fleets of thousands on maps with open areas beside their aisles (lanes.hpp)
   // plan over operations in the rotation model when the budget allows (auto), with a move along an
-  // open area 2 dearer when operations are expected (given, or auto with a step budget of 9 us an
+  // open area 2 dearer when operations are expected (given, or auto with a step budget of 7 us an
   // agent or more); not over cells, not below 2,000 agents, not in the mapf model or the paper, not
-  // on maps without open areas.
+  // on maps without open areas. Rule anytime-lns: where operations are expected their search
+  // spends the rest of the budget, and the windowed LNS is off.
   const Grid banded = Grid::load(std::string(GDRHCR_SOURCE_DIR) + "/maps/lorr-warehouse-140-500.map");
   auto operations = [&](const Grid& map, const std::string& preset, ActionModel model, const char* way = nullptr,
                         const char* budget = "0.1") {
@@ -166,23 +167,22 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
     p.set("step-budget", budget);
     if (way) p.set("rotation-pibt", way);
     const PlannerParams v = PlannerParams::resolve("gd-rhcr", p, MapFacts(map, 3000, model));
-    return std::pair{v.text("rotation-pibt"), v.real("open-cost")};
+    return std::tuple{v.text("rotation-pibt"), v.real("open-cost"), v.integer("lns-window")};
   };
+  using Way = std::tuple<std::string, double, int>;
   Params none_given;
   const PlannerParams small = PlannerParams::resolve("gd-rhcr", none_given, MapFacts(banded, 1500, ActionModel::kRotation));
   EXPECT_EQ(std::pair(small.text("rotation-pibt"), small.real("open-cost")), std::pair(std::string("cells"), 0.0));
-  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation), std::pair(std::string("auto"), 2.0));
-  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.028"), std::pair(std::string("auto"), 2.0));
-  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.026"), std::pair(std::string("auto"), 0.0));
-  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0"), std::pair(std::string("auto"), 0.0));
-  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, "operations"),
-            std::pair(std::string("operations"), 2.0));
-  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, "operations", "0"),
-            std::pair(std::string("operations"), 2.0));
-  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, "cells"), std::pair(std::string("cells"), 0.0));
-  EXPECT_EQ(operations(banded, "default", ActionModel::kMapf), std::pair(std::string("cells"), 0.0));
-  EXPECT_EQ(operations(banded, "paper", ActionModel::kRotation), std::pair(std::string("operations"), 0.0));
-  EXPECT_EQ(operations(warehouse, "default", ActionModel::kRotation), std::pair(std::string("cells"), 0.0));
+  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation), Way("auto", 2.0, 0));
+  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.022"), Way("auto", 2.0, 0));
+  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.020"), Way("auto", 0.0, 10));
+  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0"), Way("auto", 0.0, 10));
+  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, "operations"), Way("operations", 2.0, 0));
+  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, "operations", "0"), Way("operations", 2.0, 0));
+  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, "cells"), Way("cells", 0.0, 10));
+  EXPECT_EQ(operations(banded, "default", ActionModel::kMapf), Way("cells", 0.0, 0));
+  EXPECT_EQ(operations(banded, "paper", ActionModel::kRotation), Way("operations", 0.0, 0));
+  EXPECT_EQ(operations(warehouse, "default", ActionModel::kRotation), Way("cells", 0.0, 0));
   Params given;
   const PlannerParams sparse = PlannerParams::resolve("gd-rhcr", given, MapFacts(random, 300, ActionModel::kRotation));
   EXPECT_EQ(std::pair(sparse.text("rotation-pibt"), sparse.real("open-cost")), std::pair(std::string("cells"), 0.0));
