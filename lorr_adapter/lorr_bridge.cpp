@@ -416,6 +416,11 @@ void Bridge::plan(int timestep, double time_limit_s, const std::vector<int>& loc
   m.planner->plan_step(view, m.next);
   const uint64_t planner_rows = m.planning_dist->bfs_count() - rows_before;
   m.stats.rows_in_planner += planner_rows;
+  // The planner's counters so far, every kStatsEvery steps (the Start-Kit ends with _exit, so
+  // there is no summary at the end): how many steps planned over operations, what the search did.
+  if ((timestep + 1) % kStatsEvery == 0)
+    std::fprintf(stderr, "gdrhcr lorr adapter: timestep %d: planner stats %s\n", timestep,
+                 m.planner->stats().dump().c_str());
   if (capped) {
     const double ran = std::chrono::duration<double>(Clock::now() - t_plan).count();
     m.overrun.add(ran - view.step_budget_s);

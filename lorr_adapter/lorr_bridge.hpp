@@ -41,6 +41,7 @@ namespace gdrhcr_lorr {
 //                     gdrhcr::MapfInRotation) or native (its own rotation planning); default
 //                     gdrhcr::kLorrTurnPlanning
 constexpr int kDistBudgetMb = 8192;  // GDRHCR_DIST_MB's default where the memory allows
+constexpr int kStatsEvery = 500;     // steps between the planner's counters on standard error
 struct BridgeOptions {
   std::string planner = "gd-rhcr";
   std::vector<std::pair<std::string, std::string>> params;

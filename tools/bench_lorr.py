@@ -88,7 +88,9 @@ def run_one(kit, instance, steps, budget, out_dir):
         ours = [float(x) for x in f.read().split()]
     kit_ms = [1000 * t for t in r.get("plannerTimes", [])]
     prep = re.search(r"traffic-cost (\S+) from the preparation", proc.stderr)
+    stats = re.findall(r"planner stats (\{.*\})", proc.stderr)  # the adapter's, every 500 steps
     return {
+        "planner_stats": json.loads(stats[-1]) if stats else None,
         "prep_traffic_cost": float(prep.group(1)) if prep else None,
         "instance": name, "steps": steps, "budget_ms": budget, "errands": r["numTaskFinished"],
         "all_valid": r["AllValid"], "errors": len(r.get("errors", [])),
@@ -168,6 +170,10 @@ def main(argv=None):
             e = row["errand_steps"]
             print(f"{'':<12} per errand: {e['steps_per_errand']:.1f} steps = {e['forward_per_errand']:.1f} forward"
                   f" + {e['turns_per_errand']:.1f} turns + {e['waits_per_errand']:.1f} waits", flush=True)
+            ps = row["planner_stats"] or {}
+            if "secondary_operation_calls" in ps and ps.get("steps_with_a_solve"):
+                print(f"{'':<12} PIBT over operations at {ps['secondary_operation_calls']} of "
+                      f"{ps['steps_with_a_solve']} steps with a solve (to the last stats line)", flush=True)
     if a.json:
         os.makedirs(os.path.dirname(os.path.abspath(a.json)), exist_ok=True)
         with open(a.json, "w") as f:

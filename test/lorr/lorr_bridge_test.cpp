@@ -101,6 +101,27 @@ TEST(LorrBridge, WhenEveryCellsRowFitsTheRowsComeBeforeTheFirstStepAndItMoves) {
   EXPECT_EQ(s.rows_in_planner, 0u);
 }
 
+TEST(LorrBridge, ThePlannersCountersGoToStandardErrorEveryFewHundredSteps) {
+  // The Start-Kit ends with _exit, so the planner's counters (how many steps planned over
+  // operations, ...) are written as they stand every kStatsEvery steps: one line after the last
+  // step of each such run of steps, its JSON whole.
+  SmallFleet f;
+  Bridge bridge = f.bridge(0);
+  testing::internal::CaptureStderr();
+  f.run(bridge, 0, gdrhcr_lorr::kStatsEvery - 2);
+  const std::string before = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(before.find("planner stats"), std::string::npos) << before;
+  testing::internal::CaptureStderr();
+  f.run(bridge, gdrhcr_lorr::kStatsEvery - 1, gdrhcr_lorr::kStatsEvery - 1);
+  const std::string line = testing::internal::GetCapturedStderr();
+  const std::string tag = "timestep " + std::to_string(gdrhcr_lorr::kStatsEvery - 1) + ": planner stats ";
+  const size_t at = line.find(tag);
+  ASSERT_NE(at, std::string::npos) << line;
+  const auto stats = nlohmann::json::parse(line.substr(at + tag.size()));
+  EXPECT_TRUE(stats.contains("secondary_operation_calls")) << stats.dump();
+  EXPECT_GT(stats.at("steps_with_a_solve").get<long>(), 0) << stats.dump();
+}
+
 TEST(LorrBridge, WithABudgetTheWarmUpWaitsOnceThenTheFleetMovesWithoutCollisions) {
   SmallFleet f;
   Bridge bridge = f.bridge(100, 1);
