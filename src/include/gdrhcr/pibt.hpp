@@ -257,7 +257,7 @@ class PibtStep {
   long op_search_rounds_ = 0, op_zoned_rounds_ = 0;
   long stalls_ = 0;
   long op_calls_ = 0;
-  bool op_auto_ = false;  // kAuto: the last call was planned over operations
+  bool op_auto_ = false;  // kAuto: its last choice was operations (then kOpStay applies)
   bool op_last_ = false;  // the last call was planned over operations (any way)
   bool op_cold_ = false;  // this call is over operations and the last one was not (see over_operations)
   double op_pass_s_ = 0;  // kAuto: the first pass over operations, in seconds, smoothed (see over_operations)
