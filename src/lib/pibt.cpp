@@ -29,6 +29,10 @@ PibtStep::PibtStep(const Grid& grid, int num_agents, uint64_t seed, PibtOptions 
       goal_of_(num_agents, kNoCell) {
   std::uniform_real_distribution<double> tie(0.0, 1.0);
   for (auto& p : priority_) p = tie(rng_);
+  // kAuto times its first pass over operations: the tables are made (and their pages touched)
+  // here, so that no call's first pass pays for them (on warehouse_large 80 ms of setup at the
+  // first call against 25-30 later).
+  if (opt_.rotation == PibtOptions::Rotation::kAuto) size_operations(num_agents);
 }
 
 // Priority = time since the agent last reached a goal, plus its fixed tie-breaker in [0, 1).
@@ -295,15 +299,9 @@ bool PibtStep::stalled() {
 // near the bound). The first pass's time is known from the calls over operations; each call over
 // cells lowers it by kOpRetry, so that operations are tried again now and then (a first call,
 // computing rows, or a slow step does not rule them out for good; a change of way costs the fleet
-// a step or two, so seldom). A call over operations after one over cells (or the first) starts
-// cold: no agent carries an operation on, every one is built from waiting, and the first call also
-// allocates and touches its tables, so its first pass tells nothing of the next ones (on
-// warehouse_large 60-160 ms against 40) and is not measured (op_cold_); the next call is over
-// operations too (kOpStay < kOpRoom) and measures it.
+// a step or two, so seldom).
 bool PibtStep::over_operations(const WorldView& world) {
   const bool over = operations_fit(world) && !stalled();
-  op_cold_ = over && !op_last_;
-  op_last_ = over;
   op_calls_ += over;
   return over;
 }

@@ -313,7 +313,7 @@ void PibtStep::first_pass(const WorldView& world, std::chrono::steady_clock::tim
   using Seconds = std::chrono::duration<double>;
   const double setup = Seconds(loop - start).count(), pass = Seconds(std::chrono::steady_clock::now() - loop).count();
   const double whole = first_pass_estimate(setup, pass, order_.size(), reached);
-  if (!op_cold_) op_pass_s_ = op_pass_s_ > 0 ? op_pass_s_ + kOpPassWeight * (whole - op_pass_s_) : whole;
+  op_pass_s_ = op_pass_s_ > 0 ? op_pass_s_ + kOpPassWeight * (whole - op_pass_s_) : whole;
 }
 
 // One round of the search in zone z: its agents rebuilt in random order, each change kept when
@@ -386,6 +386,15 @@ void PibtStep::search_operations(const WorldView& world) {
   }
 }
 
+// The tables of the calls over operations, for n agents (kept, grown when a call has more).
+void PibtStep::size_operations(int n) {
+  res_.resize(size_t(kOpSteps) * grid_.num_cells(), kFree);
+  if (static_cast<int>(op_.size()) < n) {
+    op_.resize(n), op_held_t_.resize(n, INT_MIN), op_wait_cost_.resize(n), op_power_.resize(n);
+    op_key_.resize(n), op_cand_.resize(size_t(n) * kMaxOps), op_cand_n_.resize(n);
+  }
+}
+
 // The step in the rotation model (EPIBT): every agent of the call starts holding the operation it
 // carried on from the last step (or waits), the agents are built in priority order, and with a
 // deadline the rest of the time goes to rebuilding agents in random order, keeping each change
@@ -395,11 +404,7 @@ void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
                                const std::vector<std::pair<Cell, Cell>>& fixed_moves) {
   const auto start = std::chrono::steady_clock::now();
   const int n = world.num_agents();
-  res_.resize(size_t(kOpSteps) * grid_.num_cells(), kFree);
-  if (static_cast<int>(op_.size()) < n) {
-    op_.resize(n), op_held_t_.resize(n, INT_MIN), op_wait_cost_.resize(n), op_power_.resize(n);
-    op_key_.resize(n), op_cand_.resize(size_t(n) * kMaxOps), op_cand_n_.resize(n);
-  }
+  size_operations(n);
   auto fix = [&](Cell c, int from_k) {
     for (int k = from_k; c != kNoCell && k <= kOpSteps; ++k) res(k, c) = kFixed;
   };

@@ -342,53 +342,24 @@ TEST(RotationPlanners, AutoIsNotRuledOutByACallWhoseDeadlinePassedBeforeItsFirst
   // (each agent's operations listed) builds nobody, so it counts as twice its setup (on a fast
   // machine it may build a few: at most twice their loop more). The next call, with a deadline
   // 10 s off, is over operations again (that setup scaled up from no agent, or from one, would
-  // rule operations out for thousands of steps). The cut call follows one over operations, so it
-  // is measured (a cold call is not). The deadline is 1 ms off, so on a loaded machine the call
-  // may be decided past it (over cells): tried up to 5 times.
+  // rule operations out for thousands of steps). The deadline is 1 ms off, so on a loaded
+  // machine the call may be decided past it (over cells): tried up to 5 times.
   AutoCrowd c;
   using Clock = std::chrono::steady_clock;
   ASSERT_TRUE(c.step());  // rows; over cells
   ASSERT_EQ(c.pibt.operation_calls(), 0);
-  bool cut = false;  // a measured call over operations stopped by its deadline
+  bool cut = false;  // a call over operations stopped by its deadline
   for (int attempt = 0; attempt < 5 && !cut; ++attempt) {
-    c.pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
-    ASSERT_TRUE(c.step());
     const long calls = c.pibt.operation_calls(), stops = c.pibt.deadline_stops();
-    const double before = c.pibt.first_pass_s();
     c.pibt.set_deadline(Clock::now() + std::chrono::milliseconds(1));
     ASSERT_TRUE(c.step());
-    cut = c.pibt.operation_calls() > calls && c.pibt.deadline_stops() > stops && c.pibt.first_pass_s() != before;
+    cut = c.pibt.operation_calls() > calls && c.pibt.deadline_stops() > stops;
   }
-  ASSERT_TRUE(cut) << "no measured call was decided over operations before its deadline";
+  ASSERT_TRUE(cut) << "no call was decided over operations before its deadline";
   const long calls = c.pibt.operation_calls();
   c.pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
   ASSERT_TRUE(c.step());
   EXPECT_EQ(c.pibt.operation_calls(), calls + 1);
-}
-
-TEST(RotationPlanners, AutoDoesNotMeasureAColdFirstPass) {
-  // kAuto over 3,000 agents. A call over operations after one over cells (or the first) starts
-  // cold: no agent carries an operation on, and the first also allocates its tables. Its first
-  // pass is not measured (on warehouse_large such a call took 60-160 ms against 40, and ruled
-  // operations out for hundreds of steps); the next call over operations is measured.
-  AutoCrowd c;
-  using Clock = std::chrono::steady_clock;
-  ASSERT_TRUE(c.step());  // rows; no deadline: over cells
-  for (int round = 0; round < 2; ++round) {
-    SCOPED_TRACE("round " + std::to_string(round));
-    const double before = c.pibt.first_pass_s();
-    c.pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
-    ASSERT_TRUE(c.step());
-    ASSERT_EQ(c.pibt.operation_calls(), 2 * round + 1);
-    EXPECT_EQ(c.pibt.first_pass_s(), before);  // cold: not measured
-    c.pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
-    ASSERT_TRUE(c.step());
-    ASSERT_EQ(c.pibt.operation_calls(), 2 * round + 2);
-    EXPECT_GT(c.pibt.first_pass_s(), 0);
-    EXPECT_NE(c.pibt.first_pass_s(), before);  // warm: measured
-    ASSERT_TRUE(c.step());  // no deadline: over cells
-    ASSERT_EQ(c.pibt.operation_calls(), 2 * round + 2);
-  }
 }
 
 TEST(RotationPlanners, AutoWeighsTheFirstPassAgainstTheStepsTimeWhenItsStartIsGiven) {
@@ -398,19 +369,16 @@ TEST(RotationPlanners, AutoWeighsTheFirstPassAgainstTheStepsTimeWhenItsStartIsGi
   AutoCrowd c;
   using Clock = std::chrono::steady_clock;
   ASSERT_TRUE(c.step());  // rows; over cells
-  for (int k = 0; k < 2; ++k) {  // the first call is cold, the second measured
-    c.pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
-    ASSERT_TRUE(c.step());
-  }
-  ASSERT_EQ(c.pibt.operation_calls(), 2);
-  ASSERT_GT(c.pibt.first_pass_s(), 0);
+  c.pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
+  ASSERT_TRUE(c.step());
+  ASSERT_EQ(c.pibt.operation_calls(), 1);  // measured
   c.pibt.set_deadline(Clock::now());
   ASSERT_TRUE(c.step());
-  EXPECT_EQ(c.pibt.operation_calls(), 2);  // no time left: cells
+  EXPECT_EQ(c.pibt.operation_calls(), 1);  // no time left: cells
   const auto now = Clock::now();
   c.pibt.set_deadline(now, now - std::chrono::seconds(10));
   ASSERT_TRUE(c.step());
-  EXPECT_EQ(c.pibt.operation_calls(), 3);
+  EXPECT_EQ(c.pibt.operation_calls(), 2);
 }
 
 TEST(RotationPlanners, AFirstPassCutShortIsEstimatedAtMostTwiceItsLoop) {

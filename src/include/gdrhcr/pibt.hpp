@@ -169,7 +169,6 @@ class PibtStep {
   long zoned_rounds() const { return op_zoned_rounds_; }   // ... of them in two zones at once
   long stalls() const { return stalls_; }  // operations: calls planned over cells (stalled)
   long operation_calls() const { return op_calls_; }  // rotation model: calls planned over operations
-  double first_pass_s() const { return op_pass_s_; }  // kAuto: the first pass's estimate (see over_operations)
   static constexpr int kStartBox = 4;
   static constexpr double kStartNoise = 5.0;
   static constexpr int kOpSteps = 3;  // actions per operation in the rotation model
@@ -227,6 +226,7 @@ class PibtStep {
   bool stalled();
   bool over_operations(const WorldView& world);
   bool operations_fit(const WorldView& world);  // kAuto: see over_operations
+  void size_operations(int n);
   int blocker(int ai, const OpPath& p) const;
   void reserve(int ai, double& score);
   void release(int ai, double& score);
@@ -258,8 +258,6 @@ class PibtStep {
   long stalls_ = 0;
   long op_calls_ = 0;
   bool op_auto_ = false;  // kAuto: its last choice was operations (then kOpStay applies)
-  bool op_last_ = false;  // the last call was planned over operations (any way)
-  bool op_cold_ = false;  // this call is over operations and the last one was not (see over_operations)
   double op_pass_s_ = 0;  // kAuto: the first pass over operations, in seconds, smoothed (see over_operations)
   std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
   std::chrono::steady_clock::time_point step_start_ = std::chrono::steady_clock::time_point::max();
