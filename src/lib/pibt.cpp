@@ -301,21 +301,21 @@ bool PibtStep::stalled() {
 // computing rows, or a slow step does not rule them out for good; a change of way costs the fleet
 // a step or two, so seldom).
 bool PibtStep::over_operations(const WorldView& world) {
-  const bool over = operations_fit(world) && !stalled();
-  op_calls_ += over;
-  return over;
-}
-
-bool PibtStep::operations_fit(const WorldView& world) {
   using Clock = std::chrono::steady_clock;
   if (!world.rotation() || opt_.rotation == PibtOptions::Rotation::kCells) return false;
-  if (opt_.rotation != PibtOptions::Rotation::kAuto) return true;
-  const double room = op_auto_ ? kOpStay : kOpRoom;
-  const Clock::time_point from = step_start_ != Clock::time_point::max() ? step_start_ : Clock::now();
-  op_auto_ = deadline_ != Clock::time_point::max() &&
-             std::chrono::duration<double>(deadline_ - from).count() >= room * op_pass_s_;
-  if (!op_auto_) op_pass_s_ *= kOpRetry;
-  return op_auto_;
+  if (opt_.rotation == PibtOptions::Rotation::kAuto) {
+    const double room = op_auto_ ? kOpStay : kOpRoom;
+    const Clock::time_point from = step_start_ != Clock::time_point::max() ? step_start_ : Clock::now();
+    op_auto_ = deadline_ != Clock::time_point::max() &&
+               std::chrono::duration<double>(deadline_ - from).count() >= room * op_pass_s_;
+    if (!op_auto_) {
+      op_pass_s_ *= kOpRetry;
+      return false;
+    }
+  }
+  if (stalled()) return false;
+  ++op_calls_;
+  return true;
 }
 
 // The mapf step (and the rotation model's kCells): immovable agents, fixed moves and blocked

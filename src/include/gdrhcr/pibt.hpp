@@ -225,7 +225,6 @@ class PibtStep {
   bool past_deadline(long& counter) const;
   bool stalled();
   bool over_operations(const WorldView& world);
-  bool operations_fit(const WorldView& world);  // kAuto: see over_operations
   void size_operations(int n);
   int blocker(int ai, const OpPath& p) const;
   void reserve(int ai, double& score);
@@ -257,7 +256,7 @@ class PibtStep {
   long op_search_rounds_ = 0, op_zoned_rounds_ = 0;
   long stalls_ = 0;
   long op_calls_ = 0;
-  bool op_auto_ = false;  // kAuto: its last choice was operations (then kOpStay applies)
+  bool op_auto_ = false;  // kAuto: the last call was planned over operations
   double op_pass_s_ = 0;  // kAuto: the first pass over operations, in seconds, smoothed (see over_operations)
   std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
   std::chrono::steady_clock::time_point step_start_ = std::chrono::steady_clock::time_point::max();
