@@ -299,23 +299,35 @@ bool PibtStep::stalled() {
 // near the bound). The first pass's time is known from the calls over operations; each call over
 // cells lowers it by kOpRetry, so that operations are tried again now and then (a first call,
 // computing rows, or a slow step does not rule them out for good; a change of way costs the fleet
-// a step or two, so seldom).
+// a step or two, so seldom). Retries that do not fit back off (OpRetry): while a wait holds, the
+// estimate is not lowered, so only a deadline with room for it brings operations back.
 bool PibtStep::over_operations(const WorldView& world) {
   using Clock = std::chrono::steady_clock;
   if (!world.rotation() || opt_.rotation == PibtOptions::Rotation::kCells) return false;
   if (opt_.rotation == PibtOptions::Rotation::kAuto) {
     const double room = op_auto_ ? kOpStay : kOpRoom;
     const Clock::time_point from = step_start_ != Clock::time_point::max() ? step_start_ : Clock::now();
-    op_auto_ = deadline_ != Clock::time_point::max() &&
-               std::chrono::duration<double>(deadline_ - from).count() >= room * op_pass_s_;
+    const double have =
+        deadline_ != Clock::time_point::max() ? std::chrono::duration<double>(deadline_ - from).count() : -1;
+    const bool was = op_auto_;
+    op_auto_ = have >= room * op_pass_s_;
     if (!op_auto_) {
-      op_pass_s_ *= kOpRetry;
+      if (was) op_retry_.left();
+      if (!op_retry_.holding()) op_pass_s_ *= kOpRetry;
+      op_retry_.tick();
       return false;
     }
+    op_retry_.over_operations();
   }
   if (stalled()) return false;
   ++op_calls_;
   return true;
+}
+
+void PibtStep::OpRetry::left() {
+  backoff = streak >= kShortSeries ? 0 : backoff == 0 ? kFirstHold : std::min(2 * backoff, kMaxHold);
+  hold = backoff;
+  streak = 0;
 }
 
 // The mapf step (and the rotation model's kCells): immovable agents, fixed moves and blocked

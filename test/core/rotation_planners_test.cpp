@@ -337,6 +337,36 @@ TEST(RotationPlanners, AutoPlansOverOperationsOnlyWhenTheDeadlineLeavesRoom) {
   EXPECT_EQ(pos[1], g.cell(0, 1));
 }
 
+TEST(RotationPlanners, AutoBacksOffFromRetriesOverOperationsThatDoNotFit) {
+  // A long series over operations that ends sets no wait. Each retry of one call that ends at once
+  // waits twice as many calls as the one before, from kFirstHold up to kMaxHold; a long series
+  // again resets the wait.
+  using R = PibtStep::OpRetry;
+  R r;
+  auto series = [&](int calls) {
+    for (int k = 0; k < calls; ++k) r.over_operations();
+    r.left();
+  };
+  auto wait = [&] {
+    int calls = 0;
+    for (; r.holding(); r.tick()) ++calls;
+    return calls;
+  };
+  series(R::kShortSeries);
+  EXPECT_EQ(wait(), 0);
+  const int expect[] = {100, 200, 400, 800, 1600, 3200, 3200};
+  ASSERT_EQ(R::kFirstHold, expect[0]);
+  ASSERT_EQ(R::kMaxHold, 3200);
+  for (int k = 0; k < 7; ++k) {
+    series(1 + k % 3);
+    EXPECT_EQ(wait(), expect[k]) << "retry " << k;
+  }
+  series(R::kShortSeries);
+  EXPECT_EQ(wait(), 0);
+  series(2);
+  EXPECT_EQ(wait(), R::kFirstHold);
+}
+
 TEST(RotationPlanners, AutoIsNotRuledOutByACallWhoseDeadlinePassedBeforeItsFirstPass) {
   // kAuto over 3,000 agents: a call decided over operations whose deadline passes during its setup
   // (each agent's operations listed) builds nobody, so it counts as twice its setup (on a fast

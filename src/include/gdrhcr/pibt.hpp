@@ -177,6 +177,22 @@ class PibtStep {
   static constexpr double kOpStay = 1.25;       // kAuto: see over_operations
   static constexpr double kOpRetry = 0.995;     // kAuto: see over_operations
   static constexpr double kOpPassWeight = 0.1;  // kAuto: weight of the last first pass in its estimate
+  // kAuto's back-off from retries over operations that do not fit. A series of calls over
+  // operations shorter than kShortSeries was a retry that did not fit: the next retry waits
+  // kFirstHold calls, twice as many after each such retry in a row, up to kMaxHold; a longer
+  // series resets the wait. A retry that does not fit costs a slow step and a change of way, so
+  // where operations never fit (10 and 30 ms on warehouse_large) they are tried a few times a run,
+  // not every hundred steps.
+  struct OpRetry {
+    static constexpr int kShortSeries = 100, kFirstHold = 100, kMaxHold = 3200;
+    int streak = 0;   // calls in a row over operations
+    int backoff = 0;  // the wait set after the last series, in calls
+    int hold = 0;     // calls left to wait
+    void over_operations() { ++streak; }
+    void left();  // a series over operations ended
+    void tick() { hold -= hold > 0; }
+    bool holding() const { return hold > 0; }
+  };
   static constexpr double kOpCutScale = 2;      // kAuto: a first pass cut short took at most this times longer
   // kAuto: the whole first pass estimated from a call's setup and building loop (seconds) that
   // reached `reached` agents of `fleet` (see first_pass in pibt_operations.cpp).
@@ -257,6 +273,7 @@ class PibtStep {
   long stalls_ = 0;
   long op_calls_ = 0;
   bool op_auto_ = false;  // kAuto: the last call was planned over operations
+  OpRetry op_retry_;
   double op_pass_s_ = 0;  // kAuto: the first pass over operations, in seconds, smoothed (see over_operations)
   std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
   std::chrono::steady_clock::time_point step_start_ = std::chrono::steady_clock::time_point::max();
