@@ -90,30 +90,10 @@ int PibtStep::blocker(int ai, const OpPath& p) const {
   return who;
 }
 
-// The path and cost of operation `code` for ai from its pose; false when it leaves the map. The
-// cost is the step at which it reaches the goal, else kOpSteps + 1 + the distance with turns from
-// the state it ends in.
-bool PibtStep::op_choice(const WorldView& world, int ai, int code, OpChoice& out) const {
-  const Operation op = decode(code);
-  const DistRow& row = *rows_[ai];
-  Pose q = world.pose(ai);
-  out.path.cell[0] = q.cell, out.path.heading[0] = q.heading;
-  int reached = -1;
-  for (int k = 1; k <= kOpSteps; ++k) {
-    q = apply_action(grid_, q, op[k - 1]);
-    if (q.cell == kNoCell) return false;
-    out.path.cell[k] = q.cell, out.path.heading[k] = q.heading;
-    if (q.cell == goal_of_[ai] && reached < 0) reached = k;
-  }
-  out.cost = reached >= 0 ? reached : kOpSteps + 1 + std::min(row.at(q.cell, q.heading), 1 << 20);
-  out.code = static_cast<int16_t>(code);
-  return true;
-}
-
 // ai's operations, best first: one starting with the preferred cell's action (a guidance path),
 // then the least cost, then the fewest leading waits (an agent asked to give way that puts it
 // off is asked again at the next step), then the earliest progress, then at random.
-void PibtStep::order_operations(const WorldView& world, int ai) {
+void PibtStep::order_operations(const WorldView& world, int ai, std::mt19937_64& rng) {
   const Pose start = world.pose(ai);
   const DistRow& row = *rows_[ai];
   const Cell pref = preferred_ ? (*preferred_)[ai] : kNoCell;
@@ -121,31 +101,80 @@ void PibtStep::order_operations(const WorldView& world, int ai) {
   OpChoice* cand = &op_cand_[size_t(ai) * kMaxOps];
   std::array<std::pair<long long, int>, kMaxOps> keyed;
   OpChoice found[kMaxOps];
+  // The pose after each prefix of actions, and its distance (with turns), once per prefix: level l
+  // holds the prefixes of l actions, prefix p's action k being kAll[p / 4^k % 4] as in the codes.
+  // Operations share their prefixes, so this reads the row about half as often as each operation
+  // on its own (10,000 agents list theirs at every call).
+  Pose pose[kOpSteps][kMaxOps];
+  int dist[kOpSteps][kMaxOps];
+  auto step = [&](const Pose& from, Action a, Pose& to, int& d) {
+    to = from.cell == kNoCell ? from : apply_action(grid_, from, a);
+    d = to.cell == kNoCell ? kUnreachable : std::min(row.at(to.cell, to.heading), 1 << 20);
+  };
+  for (int l = 1, width = 4; l < kOpSteps; ++l, width *= 4)
+    for (int p = 0; p < width; ++p)
+      step(l == 1 ? start : pose[l - 2][p % (width / 4)], kAll[p / (width / 4)], pose[l - 1][p], dist[l - 1][p]);
+  constexpr int kLast = kMaxOps / 4;  // 4^(kOpSteps - 1): prefixes of all but the last action
   int m = 0;
   for (int code : operation_codes()) {
+    Pose& end = pose[kOpSteps - 1][code];
+    step(kOpSteps == 1 ? start : pose[kOpSteps - 2][code % kLast], kAll[code / kLast], end, dist[kOpSteps - 1][code]);
+    if (end.cell == kNoCell) continue;
     OpChoice& c = found[m];
-    if (!op_choice(world, ai, code, c)) continue;
+    c.path.cell[0] = start.cell, c.path.heading[0] = start.heading;
+    int reached = -1, sum = 0;
+    for (int k = 1, width = 4; k <= kOpSteps; ++k, width *= 4) {
+      const int p = k == kOpSteps ? code : code % width;
+      const Pose& q = pose[k - 1][p];
+      c.path.cell[k] = q.cell, c.path.heading[k] = q.heading;
+      if (q.cell == goal_of_[ai] && reached < 0) reached = k;
+      sum += dist[k - 1][p];
+    }
+    c.cost = reached >= 0 ? reached : kOpSteps + 1 + dist[kOpSteps - 1][code];
+    c.code = static_cast<int16_t>(code);
     const Operation op = decode(code);
     bool preferred = false;
     if (pref == start.cell) preferred = op[0] == Action::kWait;
     else if (pref_h != kNoHeading)
       preferred = op[0] == Action::kForward ? pref_h == start.heading
                   : op[0] != Action::kWait && turn_steps(c.path.heading[1], pref_h) < turn_steps(start.heading, pref_h);
-    int waits = 0, sum = 0;
+    int waits = 0;
     while (waits < kOpSteps && op[waits] == Action::kWait) ++waits;
-    for (int k = 1; k <= kOpSteps; ++k) sum += std::min(row.at(c.path.cell[k], c.path.heading[k]), 1 << 20);
     keyed[m] = {((preferred ? 0LL : 1LL) << 50) + (static_cast<long long>(c.cost) << 26) +
                     (static_cast<long long>(waits) << 22) + std::min(sum, (1 << 22) - 1),
                 m};
     ++m;
   }
-  std::shuffle(keyed.begin(), keyed.begin() + m, rng_);
+  std::shuffle(keyed.begin(), keyed.begin() + m, rng);
   std::stable_sort(keyed.begin(), keyed.begin() + m);
   for (int k = 0; k < m; ++k) {  // the cost orders the operations as the list does, for the score
     cand[k] = found[keyed[k].second];
     cand[k].cost = cand[k].cost * kMaxOps + k;
   }
   op_cand_n_[ai] = m;
+}
+
+// Every agent's operations (order_operations), the two halves of the call's agents listed at once
+// with search_threads > 1: with 10,000 agents the lists take 20 ms on one thread, most of the
+// first pass, and their row reads miss the cache. Each half breaks its ties with its own generator,
+// seeded from rng_ either way, so the lists do not depend on the threads.
+void PibtStep::list_operations(const WorldView& world) {
+  std::mt19937_64 rng[2] = {std::mt19937_64(rng_()), std::mt19937_64(rng_())};
+  const size_t half = order_.size() / 2;
+  auto list = [&](int h) {
+    const size_t from = h == 0 ? 0 : half, to = h == 0 ? half : order_.size();
+    for (size_t r = from; r < to; ++r) order_operations(world, order_[r], rng[h]);
+  };
+  std::thread other;
+  if (opt_.search_threads > 1 && order_.size() >= kParallelListing) {
+    try {
+      other = std::thread(list, 1);
+    } catch (const std::system_error&) {  // no thread to be had: both halves here
+    }
+  }
+  list(0);
+  if (other.joinable()) other.join();
+  else list(1);
 }
 
 // ai's operation `code` in its list (order_operations); waiting when it is not there.
@@ -417,8 +446,8 @@ void PibtStep::plan_operations(const WorldView& world, std::vector<Cell>& next,
   // Priority: EPIBT's, the nearest to its goal first (ties by PIBT's priority), and agents whose
   // goal is their own cell (none, or waiting: dead_end_wait) last, so others may displace them;
   // the weight of an agent in the score falls with its rank.
+  list_operations(world);
   for (int i : order_) {
-    order_operations(world, i);
     retreat_operations(world, i);
     op_wait_cost_[i] = listed(i, kWww).cost;
     const bool idle = goal_of_[i] == world.positions[i];  // no goal, or waiting (dead_end_wait)

@@ -156,15 +156,16 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   // Rule operations: fleets of thousands on maps with open areas beside their aisles (lanes.hpp)
   // plan over operations in the rotation model when the budget allows (auto), with a move along an
   // open area 2 dearer when operations are expected (given, or auto with a step budget of 7 us an
-  // agent or more); not over cells, not below 2,000 agents, not in the mapf model or the paper, not
+  // agent or more, 3.5 us with two threads or more); not over cells, not below 2,000 agents, not in the mapf model or the paper, not
   // on maps without open areas. Rule anytime-lns: where operations are expected their search
   // spends the rest of the budget, and the windowed LNS is off.
   const Grid banded = Grid::load(std::string(GDRHCR_SOURCE_DIR) + "/maps/lorr-warehouse-140-500.map");
   auto operations = [&](const Grid& map, const std::string& preset, ActionModel model, const char* way = nullptr,
-                        const char* budget = "0.1") {
+                        const char* budget = "0.1", const char* threads = nullptr) {
     Params p;
     p.set("preset", preset);
     p.set("step-budget", budget);
+    if (threads) p.set("threads", threads);
     if (way) p.set("rotation-pibt", way);
     const PlannerParams v = PlannerParams::resolve("gd-rhcr", p, MapFacts(map, 3000, model));
     return std::tuple{v.text("rotation-pibt"), v.real("open-cost"), v.integer("lns-window")};
@@ -176,6 +177,10 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   EXPECT_EQ(operations(banded, "default", ActionModel::kRotation), Way("auto", 2.0, 0));
   EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.022"), Way("auto", 2.0, 0));
   EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.020"), Way("auto", 0.0, 10));
+  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.020", "2"), Way("auto", 2.0, 0));
+  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.011", "2"), Way("auto", 2.0, 0));
+  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.010", "2"), Way("auto", 0.0, 10));
+  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.020", "1"), Way("auto", 0.0, 10));
   EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0"), Way("auto", 0.0, 10));
   EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, "operations"), Way("operations", 2.0, 0));
   EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, "operations", "0"), Way("operations", 2.0, 0));

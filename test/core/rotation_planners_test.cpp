@@ -367,6 +367,44 @@ TEST(RotationPlanners, AutoBacksOffFromRetriesOverOperationsThatDoNotFit) {
   EXPECT_EQ(wait(), R::kFirstHold);
 }
 
+TEST(RotationPlanners, OperationsListedOnTwoThreadsPlanAsOnOne) {
+  // 3,000 agents over operations, no budget: with search_threads 2 their operations are listed in
+  // two halves at once, each half breaking ties with its own generator seeded as on one thread. The
+  // steps are the same on one and on two threads, and valid.
+  const Grid g = Grid::from_rows(std::vector<std::string>(80, std::string(80, '.')));
+  DistTable dist(g, ActionModel::kRotation);
+  std::vector<std::vector<Pose>> runs;
+  for (int threads : {1, 2}) {
+    PibtOptions o;
+    o.rotation = PibtOptions::Rotation::kOperations;
+    o.search_threads = threads;
+    PibtStep pibt(g, 3000, 11, o);
+    std::vector<Cell> pos;
+    std::vector<Heading> heads;
+    std::vector<std::vector<Cell>> goals;
+    for (int i = 0; i < 3000; ++i) {
+      pos.push_back(g.cell(i % 80, 2 * (i / 80)));
+      heads.push_back(static_cast<Heading>(i % 4));
+      goals.push_back({g.cell((7 * i) % 80, (13 * i) % 80)});
+    }
+    StepValidator validator(g, ActionModel::kRotation);
+    std::vector<Pose> poses;
+    for (int t = 0; t < 5; ++t) {
+      ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t, goals, pos, heads)) << "threads " << threads;
+      for (int i = 0; i < 3000; ++i) poses.push_back({pos[i], heads[i]});
+    }
+    runs.push_back(poses);
+  }
+  ASSERT_EQ(runs[0].size(), runs[1].size());
+  size_t moved = 0;
+  for (size_t k = 0; k < runs[0].size(); ++k) {
+    ASSERT_EQ(runs[0][k].cell, runs[1][k].cell) << "entry " << k;
+    ASSERT_EQ(runs[0][k].heading, runs[1][k].heading) << "entry " << k;
+    moved += k >= 3000 && runs[0][k].cell != runs[0][k - 3000].cell;
+  }
+  EXPECT_GT(moved, 1000u);  // the fleet moves: the comparison is not of agents standing still
+}
+
 TEST(RotationPlanners, AutoIsNotRuledOutByACallWhoseDeadlinePassedBeforeItsFirstPass) {
   // kAuto over 3,000 agents: a call decided over operations whose deadline passes during its setup
   // (each agent's operations listed) builds nobody, so it counts as twice its setup (on a fast

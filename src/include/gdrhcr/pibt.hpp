@@ -228,8 +228,8 @@ class PibtStep {
   };
   void plan_operations(const WorldView& world, std::vector<Cell>& next,
                        const std::vector<std::pair<Cell, Cell>>& fixed_moves);
-  bool op_choice(const WorldView& world, int ai, int code, OpChoice& out) const;
-  void order_operations(const WorldView& world, int ai);
+  void order_operations(const WorldView& world, int ai, std::mt19937_64& rng);
+  void list_operations(const WorldView& world);
   void retreat_operations(const WorldView& world, int ai);
   const OpChoice& listed(int ai, int code) const;
   void start_operation(const WorldView& world, int ai);
@@ -317,6 +317,7 @@ class PibtStep {
   std::vector<Cell> row_goal_;  // the goal of each agent's row (kNoCell: none), read without the row
   static constexpr int kNear = kNumHeadings + 1;
   static constexpr size_t kNearAhead = 32;  // agents (near_distances)
+  static constexpr size_t kParallelListing = 256;  // agents from which list_operations uses two threads
   // This call's near_distances: per agent, from the 4-neighbour each heading faces, then its cell.
   std::vector<int> near_;
   uint64_t table_id_ = 0;  // the DistTable those rows came from
