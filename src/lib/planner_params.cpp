@@ -64,21 +64,18 @@ std::string rule_forecast(const std::string&, const MapFacts& f, const PlannerPa
 // The step budget per agent from which auto is expected to plan over operations (it asks for
 // PibtStep::kOpRoom times their first pass before PIBT's deadline). On warehouse_large's 10,000
 // agents, every row computed beforehand as in the Start-Kit and the windowed LNS off (rule
-// anytime-lns), it planned over operations at every step with 6 and 7 us an agent on one thread
-// (docs/results.md, "Session 43"), and with two threads, which list the agents' operations at
-// once, with 3 us (the first pass took 15-17 ms; 2 us left too little: "Session 44"). The bounds
-// leave a margin for a slower first pass.
-constexpr double kOperationsBudgetPerAgent = 7e-6;          // seconds, one thread
-constexpr double kOperationsBudgetPerAgentThreads = 3.5e-6;  // seconds, two threads or more
+// anytime-lns), it planned over operations at every step with 6 and 7 us an agent
+// (docs/results.md, "Session 43"); 7 leaves a margin for a slower first pass. With the operations
+// listed on two threads `gdrhcr_sim` held them from 3 us, but the Start-Kit at 3.7 us did not
+// ("Session 44").
+constexpr double kOperationsBudgetPerAgent = 7e-6;  // seconds
 // Whether PIBT is expected to plan over operations: asked for, or auto with a step budget that
 // leaves room for them (without one auto plans over cells).
 bool operations_expected(const MapFacts& f, const PlannerParams& earlier) {
   const std::string& way = earlier.text("rotation-pibt");
   if (way != "auto") return way == "operations";
   const double budget = earlier.has("step-budget") ? earlier.real("step-budget") : 0;
-  const bool threads = earlier.has("threads") && earlier.integer("threads") >= 2;
-  const double per_agent = threads ? kOperationsBudgetPerAgentThreads : kOperationsBudgetPerAgent;
-  return budget > 0 && budget >= per_agent * f.num_agents();
+  return budget > 0 && budget >= kOperationsBudgetPerAgent * f.num_agents();
 }
 // Where PIBT plans 3-action operations (EPIBT) in the rotation model when the step's time allows
 // (auto): fleets filling more than 90% of the free cells, and fleets of thousands on maps with
@@ -156,8 +153,8 @@ const std::vector<ParamRule>& param_rules() {
        "rotation model, fleets holding more than 90% of the free cells and fleets of more than 2,000 agents on "
        "maps with open areas beside their aisles (lanes.hpp): PIBT plans over operations when the step budget "
        "leaves room for their search, else over cells (rotation-pibt auto; elsewhere cells); where operations are "
-       "expected (given, or auto with a step budget of at least 7 us an agent, 3.5 us with two threads or more) on a "
-       "map with open areas a forward move along one costs 2 more (open-cost 2; elsewhere 0: over cells it loses)",
+       "expected (given, or auto with a step budget of at least 7 us an agent) on a map with open areas a forward "
+       "move along one costs 2 more (open-cost 2; elsewhere 0: over cells it loses)",
        std::string(kRulesFigure) + "operations", rule_operations},
       {"crowded-fleet",
        "fleets holding more than 90% of the free cells: agents wait 500 steps before they set out for a dead end "

@@ -156,7 +156,7 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   // Rule operations: fleets of thousands on maps with open areas beside their aisles (lanes.hpp)
   // plan over operations in the rotation model when the budget allows (auto), with a move along an
   // open area 2 dearer when operations are expected (given, or auto with a step budget of 7 us an
-  // agent or more, 3.5 us with two threads or more); not over cells, not below 2,000 agents, not in the mapf model or the paper, not
+  // agent or more, whatever the threads); not over cells, not below 2,000 agents, not in the mapf model or the paper, not
   // on maps without open areas. Rule anytime-lns: where operations are expected their search
   // spends the rest of the budget, and the windowed LNS is off.
   const Grid banded = Grid::load(std::string(GDRHCR_SOURCE_DIR) + "/maps/lorr-warehouse-140-500.map");
@@ -177,10 +177,8 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   EXPECT_EQ(operations(banded, "default", ActionModel::kRotation), Way("auto", 2.0, 0));
   EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.022"), Way("auto", 2.0, 0));
   EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.020"), Way("auto", 0.0, 10));
-  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.020", "2"), Way("auto", 2.0, 0));
-  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.011", "2"), Way("auto", 2.0, 0));
-  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.010", "2"), Way("auto", 0.0, 10));
-  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.020", "1"), Way("auto", 0.0, 10));
+  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.022", "2"), Way("auto", 2.0, 0));
+  EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0.020", "2"), Way("auto", 0.0, 10));
   EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, nullptr, "0"), Way("auto", 0.0, 10));
   EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, "operations"), Way("operations", 2.0, 0));
   EXPECT_EQ(operations(banded, "default", ActionModel::kRotation, "operations", "0"), Way("operations", 2.0, 0));
