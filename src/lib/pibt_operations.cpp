@@ -55,6 +55,22 @@ const std::vector<int>& operation_codes() {
 
 // The operation left of `code` after its first action: the rest, then a wait.
 int carried_code(int code) { return code / 4 + 3 * (kCodes / 4); }
+
+// Runs `first` here and `second` on another thread when `parallel` and one can be had, else
+// after `first`; returns when both are done.
+template <class First, class Second>
+void both(bool parallel, First&& first, Second&& second) {
+  std::thread other;
+  if (parallel) {
+    try {
+      other = std::thread(second);
+    } catch (const std::system_error&) {  // no thread to be had: both here
+    }
+  }
+  first();
+  if (other.joinable()) other.join();
+  else second();
+}
 }  // namespace
 
 void PibtStep::reserve(int ai, double& score) {
@@ -165,16 +181,7 @@ void PibtStep::list_operations(const WorldView& world) {
     const size_t from = h == 0 ? 0 : half, to = h == 0 ? half : order_.size();
     for (size_t r = from; r < to; ++r) order_operations(world, order_[r], rng[h]);
   };
-  std::thread other;
-  if (opt_.search_threads > 1 && order_.size() >= kParallelListing) {
-    try {
-      other = std::thread(list, 1);
-    } catch (const std::system_error&) {  // no thread to be had: both halves here
-    }
-  }
-  list(0);
-  if (other.joinable()) other.join();
-  else list(1);
+  both(opt_.search_threads > 1 && order_.size() >= kParallelListing, [&] { list(0); }, [&] { list(1); });
 }
 
 // ai's operation `code` in its list (order_operations); waiting when it is not there.
@@ -379,14 +386,7 @@ void PibtStep::search_zones(const WorldView& world, int axis) {
     for (OpZone& z : zones)
       if (zone_holds(z, op_[i].held.path)) z.agents.push_back(i);
   ++op_zoned_rounds_;
-  std::thread other;
-  try {
-    other = std::thread([&] { search_round(world, zones[1]); });
-  } catch (const std::system_error&) {  // no thread to be had: both zones here
-  }
-  search_round(world, zones[0]);
-  if (other.joinable()) other.join();
-  else search_round(world, zones[1]);
+  both(true, [&] { search_round(world, zones[0]); }, [&] { search_round(world, zones[1]); });
   op_score_ += zones[0].score + zones[1].score;
 }
 

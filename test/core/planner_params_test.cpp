@@ -156,8 +156,8 @@ TEST(PlannerParams, PresetsAndRulesPickTheDocumentedDefaults) {
   // Rule operations: fleets of thousands on maps with open areas beside their aisles (lanes.hpp)
   // plan over operations in the rotation model when the budget allows (auto), with a move along an
   // open area 2 dearer when operations are expected (given, or auto with a step budget of 7 us an
-  // agent or more, whatever the threads); not over cells, not below 2,000 agents, not in the mapf model or the paper, not
-  // on maps without open areas. Rule anytime-lns: where operations are expected their search
+  // agent or more, whatever the threads); not over cells, not below 2,000 agents, not in the mapf
+  // model or the paper, not on maps without open areas. Rule anytime-lns: where operations are expected their search
   // spends the rest of the budget, and the windowed LNS is off.
   const Grid banded = Grid::load(std::string(GDRHCR_SOURCE_DIR) + "/maps/lorr-warehouse-140-500.map");
   auto operations = [&](const Grid& map, const std::string& preset, ActionModel model, const char* way = nullptr,
