@@ -61,6 +61,7 @@
 
 #include "gdrhcr/action_model.hpp"
 #include "gdrhcr/grid.hpp"
+#include "gdrhcr/huge_pages.hpp"
 #include "gdrhcr/lanes.hpp"
 
 
@@ -174,12 +175,12 @@ class DistRow {
     std::memcpy(&v, p, sizeof v);
     return v == 0xFFFF ? kUnreachable : int(v);
   }
-  std::vector<uint16_t> d16_;  // num_free + 1 slots, the last one unreachable (obstacles)
-  std::vector<uint32_t> d32_;  // the same, for maps with more than 65,534 free cells
-  std::vector<uint8_t> excess_;  // rotation, with d32_: per slot, 2 bits per heading over the least distance
+  std::vector<uint16_t, HugePageAllocator<uint16_t>> d16_;  // num_free + 1 slots, the last one unreachable (obstacles)
+  std::vector<uint32_t, HugePageAllocator<uint32_t>> d32_;  // the same, for maps with more than 65,534 free cells
+  std::vector<uint8_t, HugePageAllocator<uint8_t>> excess_;  // rotation, with d32_: per slot, 2 bits per heading over the least distance
   // Rotation, distances under 0xFFFF: per slot 3 bytes, the least distance (16 bits, as d16_) and
   // then the excess byte, so that one cache line holds both (the same bytes as d16_ and excess_).
-  std::vector<uint8_t> packed_;
+  std::vector<uint8_t, HugePageAllocator<uint8_t>> packed_;
 };
 
 class DistTable {
