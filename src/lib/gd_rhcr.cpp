@@ -148,7 +148,9 @@ void GdRhcrPlanner::begin_step(const WorldView& world) {
   now_ = world.timestep;
   double budget_s = cfg_.step_budget_s;
   if (world.step_budget_s > 0) budget_s = budget_s > 0 ? std::min(budget_s, world.step_budget_s) : world.step_budget_s;
-  budget_ = StepBudget(StepBudget::Clock::now(), budget_s);
+  // A hard limit stops PIBT's pushes early by what the last steps did after them.
+  const double limit_s = world.step_limit_s > 0 ? std::max(1e-6, world.step_limit_s - tail_s_) : 0;
+  budget_ = StepBudget(StepBudget::Clock::now(), budget_s, limit_s);
   if (world.rotation()) partition_.compute(world.positions, *world.headings, cfg_.V);
   else partition_.compute(world.positions, cfg_.V);
   if (cfg_.max_density < 1.0) density_.count(world.positions);
@@ -287,6 +289,12 @@ void GdRhcrPlanner::merge_and_repair(const WorldView& world, StepWork& work, std
 }
 
 void GdRhcrPlanner::record_step(const StepWork& work) {
+  // How long the step went on after PIBT's pushes (turns, the final check, the forecast): with a
+  // hard limit the next step's pushes stop that much earlier. A slowly fading maximum.
+  if (budget_.limit != StepBudget::Clock::time_point::max() && pibt_.pushed_at() >= budget_.start) {
+    const double tail = std::chrono::duration<double>(StepBudget::Clock::now() - pibt_.pushed_at()).count();
+    tail_s_ = std::max(tail, kTailFade * tail_s_);
+  }
   const auto& groups = partition_.groups();
   ++steps_;
   group_count_sum_ += static_cast<long>(groups.size());
@@ -496,7 +504,7 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
     for (int i : agents)
       preferred[i] = world.rotation() ? guidance_->next_move(i, world.timestep, world.positions[i])
                                       : guidance_->next_cell(i, world.timestep, world.positions[i]);
-    pibt_.set_deadline(budget_.secondary, budget_.start);
+    pibt_.set_deadline(budget_.secondary, budget_.start, budget_.limit);
     pibt_.step(world, moves, agents, fixed, &preferred);
     for (int i : agents) {  // how often the guidance foretold the move (it had a cell for it)
       if (preferred[i] == kNoCell) continue;
@@ -504,7 +512,7 @@ void GdRhcrPlanner::run_secondary(const WorldView& world, const std::vector<int>
       if (!follows_guidance(world, i, moves[i], preferred[i])) ++guidance_missed_;
     }
   } else {
-    pibt_.set_deadline(budget_.secondary, budget_.start);
+    pibt_.set_deadline(budget_.secondary, budget_.start, budget_.limit);
     pibt_.step(world, moves, agents, fixed);
   }
   for (int i : agents) out[i] = moves[i];

@@ -278,7 +278,7 @@ void PibtStep::step(const WorldView& world, std::vector<Cell>& next, const std::
   }
   preferred_ = nullptr;
   immovable_ = nullptr;
-  deadline_ = step_start_ = std::chrono::steady_clock::time_point::max();
+  deadline_ = step_start_ = limit_ = std::chrono::steady_clock::time_point::max();
 }
 
 // Over operations: more than half of this call's agents have stood kStallSteps steps or more (a
@@ -347,19 +347,28 @@ void PibtStep::push_all(const WorldView& world, std::vector<Cell>& next,
   if (world.blocked)  // blocked cells (a late robot still leaving them): nobody enters
     for (Cell c : *world.blocked) occupied_next_[c] = kFixed;
   sort_by_priority();
-  // A call that begins past its deadline plans everyone: the step is over its budget whatever PIBT
-  // does, and stopping at once would leave all but kDeadlineStride agents to step ahead or wait.
-  const bool timed = deadline_ != std::chrono::steady_clock::time_point::max() &&
-                     std::chrono::steady_clock::now() < deadline_;
+  // A call that begins past its deadline plans everyone, up to the hard limit if there is one: the
+  // step is over its budget whatever PIBT does, and stopping at once would leave all but
+  // kDeadlineStride agents to step ahead or wait.
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point stop = Clock::now() < deadline_ ? std::min(deadline_, limit_) : limit_;
+  const bool timed = stop != Clock::time_point::max();
+  // The stop leaves room for the cheap steps of the agents not reached (ahead_s_ each, measured).
   for (size_t k = 0; k < order_.size(); ++k) {
-    if (timed && k >= kDeadlineStride && k % kDeadlineStride == 0 && std::chrono::steady_clock::now() >= deadline_) {
+    if (timed && k >= kDeadlineStride && k % kDeadlineStride == 0 &&
+        Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                           std::chrono::duration<double>(double(order_.size() - k) * ahead_s_)) >= stop) {
       ++deadline_stops_;  // the agents no push has reached take a cheap step
+      const auto cut = Clock::now();
+      const size_t rest = order_.size() - k;
       for (; k < order_.size(); ++k)
         if (next[order_[k]] == kNoCell) step_ahead(world, order_[k], next);
+      ahead_s_ = std::chrono::duration<double>(Clock::now() - cut).count() / double(rest);
       break;
     }
     if (next[order_[k]] == kNoCell) push(world, order_[k], -1, next);
   }
+  pushed_at_ = Clock::now();
   // Reset the scratch tables touched this call, so the next call starts clean in O(agents).
   for (int i : order_) {
     occupied_now_[world.positions[i]] = kFree;

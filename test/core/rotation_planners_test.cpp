@@ -234,13 +234,13 @@ struct AutoCrowd {
   static constexpr int kAgents = 3000;
   Grid g = Grid::from_rows(std::vector<std::string>(80, std::string(80, '.')));
   DistTable dist{g, ActionModel::kRotation};
-  PibtStep pibt{g, kAgents, 11, options()};
+  PibtStep pibt;
   StepValidator validator{g, ActionModel::kRotation};
   std::vector<Cell> pos;
   std::vector<Heading> heads;
   std::vector<std::vector<Cell>> goals;
   int t = 0;
-  AutoCrowd() {
+  explicit AutoCrowd(PibtOptions o = options()) : pibt(g, kAgents, 11, o) {
     for (int i = 0; i < kAgents; ++i) {
       pos.push_back(g.cell(i % 80, 2 * (i / 80)));
       heads.push_back(kEast);
@@ -255,6 +255,28 @@ struct AutoCrowd {
   bool step() { return pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads); }
 };
 }  // namespace
+
+TEST(RotationPlanners, ACallPastItsDeadlinePlansEveryoneUpToTheHardLimit) {
+  // Over cells, 3,000 agents: a call that begins past its deadline plans everyone (no stop); with
+  // a hard limit that has passed too, it stops after the first kDeadlineStride agents and the rest
+  // step ahead or wait. Both steps are valid, and the limit holds for one call only.
+  PibtOptions o;
+  o.rotation = PibtOptions::Rotation::kCells;
+  AutoCrowd c(o);
+  using Clock = std::chrono::steady_clock;
+  const auto past = Clock::now() - std::chrono::seconds(1);
+  c.pibt.set_deadline(past);
+  ASSERT_TRUE(c.step());
+  EXPECT_EQ(c.pibt.deadline_stops(), 0);
+  c.pibt.set_deadline(past, Clock::time_point::max(), past);
+  ASSERT_TRUE(c.step());
+  EXPECT_EQ(c.pibt.deadline_stops(), 1);
+  c.pibt.set_deadline(Clock::time_point::max(), Clock::time_point::max(), past);  // no budget, a limit
+  ASSERT_TRUE(c.step());
+  EXPECT_EQ(c.pibt.deadline_stops(), 2);
+  ASSERT_TRUE(c.step());  // nothing set: no stop
+  EXPECT_EQ(c.pibt.deadline_stops(), 2);
+}
 
 TEST(RotationPlanners, AnOperationIsCarriedOnWhenTheNextStepHasNoTime) {
   // A lone agent faces west with its goal 3 cells east: PIBT over operations plans turn, turn,

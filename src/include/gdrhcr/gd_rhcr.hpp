@@ -141,6 +141,8 @@ class GdRhcrPlanner : public Planner {
   StepValidator validator_;  // the final check, with its per-cell scratch kept across steps
   LocalDensity density_;
   StepBudget budget_;        // this step's
+  static constexpr double kTailFade = 0.98;  // per step, of tail_s_
+  double tail_s_ = 0;        // what steps with a hard limit did after PIBT's pushes, lately (record_step)
   std::vector<std::shared_ptr<const Plan>> plan_of_;  // lambda_i: the plan agent i follows
   std::vector<int> slot_of_;                          // agent i's row in that plan
   // Agents without a plan (the secondary solver's): their last step, from -> to, at step_at.

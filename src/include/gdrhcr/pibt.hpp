@@ -157,12 +157,17 @@ class PibtStep {
   // nearer their goal, else they wait; a call over cells that begins past the deadline plans
   // everyone (its step is over budget anyway). `step_start`, when given, is when the caller's
   // step began: kAuto weighs the first pass against the step's time to the deadline rather than
-  // the time left (see over_operations). One step only (cleared by step()).
+  // the time left (see over_operations). `limit`, when given, is a hard one: a call over cells
+  // that begins past its deadline plans everyone only until then, and the rest step ahead as
+  // above. One step only (cleared by step()).
   void set_deadline(std::chrono::steady_clock::time_point deadline,
-                    std::chrono::steady_clock::time_point step_start = std::chrono::steady_clock::time_point::max()) {
-    deadline_ = deadline, step_start_ = step_start;
+                    std::chrono::steady_clock::time_point step_start = std::chrono::steady_clock::time_point::max(),
+                    std::chrono::steady_clock::time_point limit = std::chrono::steady_clock::time_point::max()) {
+    deadline_ = deadline, step_start_ = step_start, limit_ = limit;
   }
   long deadline_stops() const { return deadline_stops_; }  // steps stopped so
+  // When the last call over cells ended its pushes (what follows is turns and bookkeeping).
+  std::chrono::steady_clock::time_point pushed_at() const { return pushed_at_; }
   long starts() const { return starts_; }            // rotation_starts: PIBT runs made
   long starts_won() const { return starts_won_; }    // ... configurations a shaken run gave
   long search_rounds() const { return op_search_rounds_; }  // operations: rounds of the search
@@ -277,6 +282,9 @@ class PibtStep {
   double op_pass_s_ = 0;  // kAuto: the first pass over operations, in seconds, smoothed (see over_operations)
   std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
   std::chrono::steady_clock::time_point step_start_ = std::chrono::steady_clock::time_point::max();
+  std::chrono::steady_clock::time_point limit_ = std::chrono::steady_clock::time_point::max();
+  std::chrono::steady_clock::time_point pushed_at_ = std::chrono::steady_clock::time_point::max();
+  double ahead_s_ = 0;  // seconds per agent of the last stop's cheap steps (push_all)
   long deadline_stops_ = 0;
   void order_candidates(const WorldView& world, int ai, bool pushed, Cell* cand, int m);
   void push_all(const WorldView& world, std::vector<Cell>& next,

@@ -45,6 +45,11 @@ struct WorldView {
   // a caller that spent part of its time already (the LoRR adapter's distance rows) hands on the
   // rest. Planners with a step budget (GD-RHCR) keep the smaller of the two.
   double step_budget_s = 0;
+  // A hard limit on this step's time in seconds, from the call on (0 = none): where a budget is a
+  // cap that must hold (the LoRR adapter's), PIBT stops planning agents at its share of it even in
+  // a step that began past its budget, and the agents it has not reached step ahead or wait. The
+  // budget above may be far smaller (it shrinks by what steps ran past it lately).
+  double step_limit_s = 0;
   bool rotation() const { return action_model == ActionModel::kRotation; }
   Pose pose(int i) const { return {positions[i], headings ? (*headings)[i] : kEast}; }
   int num_agents() const { return static_cast<int>(positions.size()); }
