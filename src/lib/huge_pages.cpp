@@ -39,16 +39,17 @@ Pool& pool() {
   return *p;
 }
 
-size_t rounded(size_t bytes) { return (bytes + kAlign - 1) / kAlign * kAlign; }
+size_t round_up(size_t x, size_t to) { return (x + to - 1) / to * to; }
+size_t rounded(size_t bytes) { return round_up(bytes, kAlign); }
 
 #ifdef __linux__
-// A slab of at least `bytes`, 2 MB aligned, advised for huge pages; nullptr if mmap fails.
-char* new_slab(size_t bytes) {
-  const size_t size = (bytes + kHugePage - 1) / kHugePage * kHugePage;
+// A slab of `size` bytes (a multiple of kHugePage), 2 MB aligned, advised for huge pages; nullptr
+// if mmap fails.
+char* new_slab(size_t size) {
   void* raw = mmap(nullptr, size + kHugePage, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
   if (raw == MAP_FAILED) return nullptr;
   const uintptr_t start = reinterpret_cast<uintptr_t>(raw);
-  const uintptr_t aligned = (start + kHugePage - 1) / kHugePage * kHugePage;
+  const uintptr_t aligned = round_up(start, kHugePage);
   if (aligned > start) munmap(raw, aligned - start);  // trim to the 2 MB boundary on both sides
   const uintptr_t end = start + size + kHugePage;
   if (end > aligned + size) munmap(reinterpret_cast<void*>(aligned + size), end - aligned - size);
@@ -74,15 +75,15 @@ void* allocate(size_t bytes) {
     return block;
   }
   if (p.left < size) {
-    const size_t slab = size > kSlab ? size : kSlab;
+    const size_t slab = round_up(size > kSlab ? size : kSlab, kHugePage);
     char* s = new_slab(slab);
     if (!s) {
       p.unavailable = true;
       return ::operator new(bytes);
     }
     p.next = s;
-    p.left = (slab + kHugePage - 1) / kHugePage * kHugePage;
-    p.slabs += p.left;
+    p.left = slab;
+    p.slabs += slab;
     p.ranges.emplace_back(reinterpret_cast<uintptr_t>(s), reinterpret_cast<uintptr_t>(s) + p.left);
   }
   void* block = p.next;
