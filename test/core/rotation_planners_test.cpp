@@ -278,6 +278,35 @@ TEST(RotationPlanners, ACallPastItsDeadlinePlansEveryoneUpToTheHardLimit) {
   EXPECT_EQ(c.pibt.deadline_stops(), 2);
 }
 
+TEST(RotationPlanners, DistanceReadsStopAtTheHardLimitAndTheUnreadAgentsWait) {
+  // Over cells, 3,000 agents, a hard limit that has passed: the distance reads stop after the
+  // first kDeadlineStride agents (in the call's order, here agent order), and every agent after
+  // them keeps its cell and heading; the step is valid. The next call, without a limit, reads
+  // everyone and moves agents beyond them again.
+  PibtOptions o;
+  o.rotation = PibtOptions::Rotation::kCells;
+  AutoCrowd c(o);
+  ASSERT_TRUE(c.step());  // a first call without a limit, so that the crowd is on its way
+  const auto past = std::chrono::steady_clock::now() - std::chrono::seconds(1);
+  c.pibt.set_deadline(past, std::chrono::steady_clock::time_point::max(), past);
+  const std::vector<Cell> before = c.pos;
+  const std::vector<Heading> heads = c.heads;
+  ASSERT_TRUE(c.step());
+  EXPECT_EQ(c.pibt.near_cuts(), 1);
+  int moved_late = 0;
+  for (int i = PibtStep::kDeadlineStride; i < AutoCrowd::kAgents; ++i)
+    moved_late += c.pos[i] != before[i] || c.heads[i] != heads[i];
+  EXPECT_EQ(moved_late, 0);
+  const std::vector<Cell> again = c.pos;
+  const std::vector<Heading> again_heads = c.heads;
+  ASSERT_TRUE(c.step());
+  EXPECT_EQ(c.pibt.near_cuts(), 1);
+  moved_late = 0;
+  for (int i = PibtStep::kDeadlineStride; i < AutoCrowd::kAgents; ++i)
+    moved_late += c.pos[i] != again[i] || c.heads[i] != again_heads[i];
+  EXPECT_GT(moved_late, 100);
+}
+
 TEST(RotationPlanners, AnOperationIsCarriedOnWhenTheNextStepHasNoTime) {
   // A lone agent faces west with its goal 3 cells east: PIBT over operations plans turn, turn,
   // forward (clockwise twice: two counter-clockwise turns are not an operation). The next two

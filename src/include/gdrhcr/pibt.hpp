@@ -159,13 +159,16 @@ class PibtStep {
   // step began: kAuto weighs the first pass against the step's time to the deadline rather than
   // the time left (see over_operations). `limit`, when given, is a hard one: a call over cells
   // that begins past its deadline plans everyone only until then, and the rest step ahead as
-  // above. One step only (cleared by step()).
+  // above. Reading the agents' distances (near_distances) also stops at the limit, when what is
+  // left of it would not cover the cheap steps: the agents whose distances were not read wait.
+  // One step only (cleared by step()).
   void set_deadline(std::chrono::steady_clock::time_point deadline,
                     std::chrono::steady_clock::time_point step_start = std::chrono::steady_clock::time_point::max(),
                     std::chrono::steady_clock::time_point limit = std::chrono::steady_clock::time_point::max()) {
     deadline_ = deadline, step_start_ = step_start, limit_ = limit;
   }
   long deadline_stops() const { return deadline_stops_; }  // steps stopped so
+  long near_cuts() const { return near_cuts_; }  // steps whose distance reads stopped at the limit
   // When the last call over cells ended its pushes (what follows is turns and bookkeeping).
   std::chrono::steady_clock::time_point pushed_at() const { return pushed_at_; }
   long starts() const { return starts_; }            // rotation_starts: PIBT runs made
@@ -286,6 +289,9 @@ class PibtStep {
   std::chrono::steady_clock::time_point pushed_at_ = std::chrono::steady_clock::time_point::max();
   double ahead_s_ = 0;  // seconds per agent of the last stop's cheap steps (push_all)
   long deadline_stops_ = 0;
+  long near_cuts_ = 0;
+  bool near_cut_ = false;  // this call's near_distances stopped at the limit (unread agents: kNotRead)
+  static constexpr int kNotRead = -1;  // near_: an agent's distances were not read
   void order_candidates(const WorldView& world, int ai, bool pushed, Cell* cand, int m);
   void push_all(const WorldView& world, std::vector<Cell>& next,
                 const std::vector<std::pair<Cell, Cell>>& fixed_moves);
