@@ -641,6 +641,7 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"density_fallbacks", density_fallbacks_},
           {"budget_skips", budget_skips_},
           {"secondary_deadline_stops", pibt_.deadline_stops()},
+          {"secondary_near_cuts", pibt_.near_cuts()},
           {"secondary_starts", pibt_.starts()},
           {"secondary_starts_won", pibt_.starts_won()},
           {"secondary_search_rounds", pibt_.search_rounds()},
