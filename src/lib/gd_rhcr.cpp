@@ -642,6 +642,7 @@ nlohmann::json GdRhcrPlanner::stats() const {
           {"budget_skips", budget_skips_},
           {"secondary_deadline_stops", pibt_.deadline_stops()},
           {"secondary_near_cuts", pibt_.near_cuts()},
+          {"secondary_free_takes", pibt_.free_takes()},
           {"secondary_starts", pibt_.starts()},
           {"secondary_starts_won", pibt_.starts_won()},
           {"secondary_search_rounds", pibt_.search_rounds()},

@@ -177,10 +177,10 @@ TEST(RotationPlanners, BothWaysOfRotationPibtStayValidWhenCrowded) {
     }
 }
 
-TEST(RotationPlanners, OperationsStopAtTheStepBudgetAndTheOthersWait) {
+TEST(RotationPlanners, OperationsStopAtTheStepBudgetAndTheOthersTakeFreeOperations) {
   // A budget nothing fits in: GD-RHCR's PIBT over operations stops before its first agent at
-  // every step, every agent waits (valid), and the stops are counted; without a budget it never
-  // stops and the fleet moves.
+  // every step and the stops are counted; the agents not reached take only operations that meet
+  // nobody (valid), so fewer move than without a budget, where it never stops.
   const Grid g = Grid::load(repo("maps/random-32-32-20.map"));
   DistTable dist(g, ActionModel::kRotation);
   const auto starts = random_starts(g, 300, 3);
@@ -188,7 +188,8 @@ TEST(RotationPlanners, OperationsStopAtTheStepBudgetAndTheOthersWait) {
   opt.steps = 15;
   opt.record_paths = true;
   opt.action_model = ActionModel::kRotation;
-  for (const char* budget : {"1e-9", "0"}) {
+  int moved_without = 0;
+  for (const char* budget : {"0", "1e-9"}) {
     SCOPED_TRACE(std::string("step-budget ") + budget);
     Params p;
     p.set("rotation-pibt", "operations");
@@ -204,9 +205,11 @@ TEST(RotationPlanners, OperationsStopAtTheStepBudgetAndTheOthersWait) {
     if (std::string(budget) == "0") {
       EXPECT_EQ(stops, 0);
       EXPECT_GE(moved, 150);
+      moved_without = moved;
     } else {
       EXPECT_GE(stops, opt.steps);  // every step's call (repairs may add more)
-      EXPECT_EQ(moved, 0);
+      EXPECT_GT(moved, 0);
+      EXPECT_LT(moved, moved_without);
     }
   }
 }
@@ -330,6 +333,29 @@ TEST(RotationPlanners, AnOperationIsCarriedOnWhenTheNextStepHasNoTime) {
   }
   EXPECT_EQ(pibt.deadline_stops(), 2);
   EXPECT_EQ(pos[0], g.cell(4, 0));
+}
+
+TEST(RotationPlanners, AgentsACutFirstPassDidNotReachTakeFreeOperations) {
+  // Five agents in a row along a corridor, all facing east, all bound for its east end. Every call
+  // begins past its deadline, so the first pass over operations reaches nobody. The agents not
+  // reached still take a free operation cheaper than waiting, in priority order (the nearest to
+  // the goal first), so the whole row moves east together at every step instead of waiting.
+  const Grid g = Grid::from_rows({"..............."});
+  DistTable dist(g, ActionModel::kRotation);
+  PibtOptions o;
+  o.rotation = PibtOptions::Rotation::kOperations;
+  PibtStep pibt(g, 5, 3, o);
+  std::vector<Cell> pos;
+  std::vector<Heading> heads(5, kEast);
+  std::vector<std::vector<Cell>> goals;
+  for (int i = 0; i < 5; ++i) pos.push_back(g.cell(i, 0)), goals.push_back({g.cell(14, 0)});
+  StepValidator validator(g, ActionModel::kRotation);
+  for (int t = 0; t < 3; ++t) {
+    pibt.set_deadline(std::chrono::steady_clock::now() - std::chrono::seconds(1));
+    ASSERT_TRUE(pibt_rotation_step(pibt, g, dist, validator, t, goals, pos, heads));
+    for (int i = 0; i < 5; ++i) EXPECT_EQ(pos[i], g.cell(i + t + 1, 0)) << "agent " << i << ", step " << t;
+  }
+  EXPECT_EQ(pibt.deadline_stops(), 3);
 }
 
 TEST(RotationPlanners, OperationsSwapOutOfADeadEnd) {

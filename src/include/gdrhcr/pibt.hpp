@@ -150,7 +150,8 @@ class PibtStep {
   long swaps() const { return swaps_; }
   // The next step() stops planning agents at `deadline`. Over operations the check comes before
   // each agent (and every few builds of a chain), and those not built by then keep the operation
-  // they hold, which is always valid; the search runs until the deadline. Over cells it comes before
+  // they hold, which is always valid, or take a cheaper one that meets nobody's (free_takes());
+  // the search runs until the deadline. Over cells it comes before
   // each kDeadlineStride agents of the priority order, after the first kDeadlineStride (PIBT over
   // 10,000 agents with turns takes 5-6 ms here), and the agents not planned by then step
   // ahead: into the cell they face (mapf: their nearest neighbour) when it is empty, unclaimed and
@@ -169,6 +170,7 @@ class PibtStep {
   }
   long deadline_stops() const { return deadline_stops_; }  // steps stopped so
   long near_cuts() const { return near_cuts_; }  // steps whose distance reads stopped at the limit
+  long free_takes() const { return free_takes_; }  // operations taken by agents a cut first pass did not reach
   // When the last call over cells ended its pushes (what follows is turns and bookkeeping).
   std::chrono::steady_clock::time_point pushed_at() const { return pushed_at_; }
   long starts() const { return starts_; }            // rotation_starts: PIBT runs made
@@ -245,6 +247,9 @@ class PibtStep {
   OpResult build(const WorldView& world, int ai, bool search, double root, int depth, long& counter, OpZone& z);
   void rebuild(const WorldView& world, int ai, bool search, OpZone& z);
   void first_pass(const WorldView& world, std::chrono::steady_clock::time_point start);
+  void take_free_operations(const WorldView& world, size_t from);
+  static constexpr int kFreeTries = 8;  // operations an agent a cut first pass did not reach looks at
+  long free_takes_ = 0;
   void search_operations(const WorldView& world);
   bool past_deadline(long& counter) const;
   bool stalled();
