@@ -232,6 +232,14 @@ bool PibtStep::zone_holds(const OpZone& z, const OpPath& p) const {
   return true;
 }
 
+// Whether every operation from cell c lies in zone z: c is more than kOpSteps cells inside it
+// along its axis (an operation moves at most one cell an action). Then build skips zone_holds.
+bool PibtStep::deep_in(const OpZone& z, Cell c) const {
+  if (z.id == 0) return true;
+  const int v = z.axis == 0 ? grid_.x_of(c) : grid_.y_of(c);
+  return (z.lo == INT_MIN || v - kOpSteps >= z.lo) && (z.hi == INT_MAX || v + kOpSteps <= z.hi);
+}
+
 // EPIBT's build: ai (its path released by the caller) takes its best operation that is free, or
 // that displaces one agent of lower priority than the root (`root`, its op_key_) which can in turn
 // be built around it (recursively), all within zone z. In the search the result stands only if
@@ -245,8 +253,9 @@ PibtStep::OpResult PibtStep::build(const WorldView& world, int ai, bool search, 
   op_[ai].on_stack = 1;
   const OpChoice old = op_[ai].held;
   const OpChoice* cand = &op_cand_[size_t(ai) * kMaxOps];
+  const bool deep = deep_in(z, world.positions[ai]);
   for (int c = 0; c < op_cand_n_[ai]; ++c) {
-    if (!zone_holds(z, cand[c].path)) continue;
+    if (!deep && !zone_holds(z, cand[c].path)) continue;
     const int u = blocker(ai, cand[c].path);
     if (u == kBlocked) continue;
     if (u == kFree) {
@@ -287,7 +296,7 @@ PibtStep::OpResult PibtStep::build(const WorldView& world, int ai, bool search, 
 }
 
 void PibtStep::rebuild(const WorldView& world, int ai, bool search, OpZone& z) {
-  long counter = 0;
+  long counter = 1;  // the callers looked at the clock just before: the first look is at the fourth build
   z.before = z.score;
   release(ai, z.score);
   if (build(world, ai, search, op_key_[ai], 0, counter, z) != OpResult::kAccepted) reserve(ai, z.score);
@@ -407,6 +416,8 @@ void PibtStep::search_zones(const WorldView& world, int axis) {
   }
   OpZone zones[2];
   for (int k = 0; k < 2; ++k) zones[k].id = k + 1, zones[k].round = ++op_round_, zones[k].rng.seed(rng_());
+  for (OpZone& z : zones) z.axis = axis;
+  zones[0].hi = below, zones[1].lo = above;
   for (int i : order_)
     for (OpZone& z : zones)
       if (zone_holds(z, op_[i].held.path)) z.agents.push_back(i);

@@ -39,6 +39,7 @@
 #pragma once
 
 #include <chrono>
+#include <climits>
 #include <random>
 #include <vector>
 
@@ -231,6 +232,7 @@ class PibtStep {
   // marks with its id), its agents, its round, and the change in the fleet's score it made.
   struct OpZone {
     uint8_t id = 0;
+    int axis = 0, lo = INT_MIN, hi = INT_MAX;  // its cells: those whose coordinate along axis (0 x, 1 y) is in [lo, hi]
     int round = 0;
     double score = 0, before = 0;
     std::mt19937_64 rng;
@@ -277,6 +279,7 @@ class PibtStep {
   std::vector<OpChoice> op_cand_;  // per agent, kMaxOps slots: its operations, best first
   std::vector<int> op_cand_n_;
   bool zone_holds(const OpZone& z, const OpPath& p) const;
+  bool deep_in(const OpZone& z, Cell c) const;
   void search_round(const WorldView& world, OpZone& z);
   void search_zones(const WorldView& world, int axis);
   std::vector<uint8_t> op_zone_;  // per cell: the zone it lies in this round (search_zones), 0 none
