@@ -296,7 +296,7 @@ PibtStep::OpResult PibtStep::build(const WorldView& world, int ai, bool search, 
 }
 
 void PibtStep::rebuild(const WorldView& world, int ai, bool search, OpZone& z) {
-  long counter = 1;  // the callers looked at the clock just before: the first look is at the fourth build
+  long counter = 0;
   z.before = z.score;
   release(ai, z.score);
   if (build(world, ai, search, op_key_[ai], 0, counter, z) != OpResult::kAccepted) reserve(ai, z.score);
