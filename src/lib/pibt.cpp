@@ -335,10 +335,13 @@ void PibtStep::OpRetry::left() {
 // cells taken first, then one push per agent in priority order; the scratch tables are left clean.
 void PibtStep::push_all(const WorldView& world, std::vector<Cell>& next,
                         const std::vector<std::pair<Cell, Cell>>& fixed_moves) {
-  // Immovable agents stay: their cell is taken for t+1, so nobody pushes them or moves in.
-  if (world.immovable)
+  // Immovable agents stay, and so do the agents whose distances were not read (near_distances
+  // stopped at the hard limit): their cell is taken for t+1, so nobody pushes them or moves in.
+  if (world.immovable || near_cut_)
     for (int i : order_)
-      if ((*world.immovable)[i]) next[i] = world.positions[i], occupied_next_[world.positions[i]] = i;
+      if ((world.immovable && (*world.immovable)[i]) ||
+          (near_cut_ && near_[static_cast<size_t>(i) * kNear + kNumHeadings] == kNotRead))
+        next[i] = world.positions[i], occupied_next_[world.positions[i]] = i;
   // Agents outside this call keep their moves; their cells at t and t+1 are off limits, which
   // rules out both vertex and swap conflicts with them.
   for (auto& [from, to] : fixed_moves) {
@@ -347,12 +350,6 @@ void PibtStep::push_all(const WorldView& world, std::vector<Cell>& next,
   }
   if (world.blocked)  // blocked cells (a late robot still leaving them): nobody enters
     for (Cell c : *world.blocked) occupied_next_[c] = kFixed;
-  // Agents whose distances were not read (near_distances stopped at the hard limit) wait, as
-  // immovable agents do.
-  if (near_cut_)
-    for (int i : order_)
-      if (next[i] == kNoCell && near_[static_cast<size_t>(i) * kNear + kNumHeadings] == kNotRead)
-        next[i] = world.positions[i], occupied_next_[world.positions[i]] = i;
   sort_by_priority();
   // A call that begins past its deadline plans everyone, up to the hard limit if there is one: the
   // step is over its budget whatever PIBT does, and stopping at once would leave all but
@@ -404,10 +401,10 @@ void PibtStep::near_distances(const WorldView& world) {
   // memory reads fourfold in bursts, reading 10,000 agents' rows alone can take the whole budget.
   using Clock = std::chrono::steady_clock;
   const bool timed = limit_ != Clock::time_point::max();
-  const auto reserve = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(double(n) * ahead_s_));
+  const auto cheap_steps = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(double(n) * ahead_s_));
   near_cut_ = false;
   for (size_t k = 0; k < n; ++k) {
-    if (timed && k >= kDeadlineStride && k % kDeadlineStride == 0 && Clock::now() + reserve >= limit_) {
+    if (timed && k >= kDeadlineStride && k % kDeadlineStride == 0 && Clock::now() + cheap_steps >= limit_) {
       for (; k < n; ++k) near_[static_cast<size_t>(order_[k]) * kNear + kNumHeadings] = kNotRead;
       near_cut_ = true;
       ++near_cuts_;
