@@ -141,14 +141,7 @@ struct Bridge::Impl {
       : options(o), grid(grid_of(rows, cols, map)),
         dist(grid, ActionModel::kRotation, size_t(o.dist_budget_mb) << 20, step_costs_of(o, grid, n)),
         num_agents(n) {
-    Params params = given_params(o);
-    const double budget_s = o.budget_ms / 1000.0;
-    if (budget_s > 0 && o.planner == "gd-rhcr" && !params.has("step-budget"))
-      params.set("step-budget", std::to_string(kPlannerShare * budget_s));
-    if (budget_s > 0 && o.planner == "rhcr" && !params.has("timeout")) params.set("timeout", std::to_string(budget_s));
-    // The machine's cores for GD-RHCR's pool and the windowed LNS's zones, unless given.
-    if (o.planner == "gd-rhcr" && !params.has("threads"))
-      params.set("threads", std::to_string(std::max(1u, std::thread::hardware_concurrency())));
+    Params params = planner_params(o);
     const PlannerParams values = PlannerParams::resolve(o.planner, params, MapFacts(grid, n, ActionModel::kRotation));
     params.check_all_used("GDRHCR_PARAMS for planner " + o.planner);
     const TurnPlanning turns = o.turns.empty() ? kLorrTurnPlanning : parse_turn_planning(o.turns);
@@ -272,11 +265,25 @@ struct Bridge::Impl {
     for (auto& [k, v] : o.params) params.set(k, v);
     return params;
   }
-  // The step costs GDRHCR_PARAMS ask for (the world's rows are built with them).
-  static StepCosts step_costs_of(const BridgeOptions& o, const Grid& grid, int n) {
+  // GDRHCR_PARAMS and, unless they set them, what the adapter gives the planner: GD-RHCR's step
+  // budget (its share of the cap) and the machine's cores for its pool and the windowed LNS's
+  // zones, RHCR's timeout. The planner and the world's rows both resolve these, so that a rule
+  // that reads the budget (the open cost) is the same in both.
+  static Params planner_params(const BridgeOptions& o) {
     Params params = given_params(o);
-    return step_costs(PlannerParams::resolve(o.planner, params, MapFacts(grid, n, ActionModel::kRotation)),
-                      ActionModel::kRotation);
+    const double budget_s = o.budget_ms / 1000.0;
+    if (budget_s > 0 && o.planner == "gd-rhcr" && !params.has("step-budget"))
+      params.set("step-budget", std::to_string(kPlannerShare * budget_s));
+    if (budget_s > 0 && o.planner == "rhcr" && !params.has("timeout")) params.set("timeout", std::to_string(budget_s));
+    if (o.planner == "gd-rhcr" && !params.has("threads"))
+      params.set("threads", std::to_string(std::max(1u, std::thread::hardware_concurrency())));
+    return params;
+  }
+  // The step costs the planner's parameters resolve to (the world's rows are built with them).
+  static StepCosts step_costs_of(const BridgeOptions& o, const Grid& grid, int n) {
+    Params params = planner_params(o);
+    return gdrhcr::step_costs(PlannerParams::resolve(o.planner, params, MapFacts(grid, n, ActionModel::kRotation)),
+                              ActionModel::kRotation);
   }
 
   static constexpr int kRowBatch = 2;  // rows computed at once: one row's time on two cores
@@ -351,6 +358,8 @@ Bridge::Bridge(int rows, int cols, const std::vector<int>& map, int num_agents, 
 }
 
 Bridge::~Bridge() = default;
+
+StepCosts Bridge::step_costs() const { return impl_->dist.step_costs(); }
 
 BridgeStats Bridge::stats() const {
   BridgeStats s = impl_->stats;

@@ -9,6 +9,10 @@
 #include <utility>
 #include <vector>
 
+namespace gdrhcr {
+struct StepCosts;
+}
+
 namespace gdrhcr_lorr {
 
 // Read from the environment (scripts/bench_lorr.sh sets them):
@@ -109,6 +113,9 @@ class Bridge {
   void plan(int timestep, double time_limit_s, const std::vector<int>& locations, const std::vector<int>& headings,
             const std::vector<std::vector<int>>& goals, std::vector<int>& actions);
   BridgeStats stats() const;
+  // The step costs of the world's rows (dist_table.hpp): those the planner's parameters resolve
+  // to, with the step budget the adapter gives it.
+  gdrhcr::StepCosts step_costs() const;
 
  private:
   struct Impl;

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "gdrhcr/action_model.hpp"
+#include "gdrhcr/dist_table.hpp"
 #include "gdrhcr/grid.hpp"
 
 namespace {
@@ -99,6 +100,25 @@ TEST(LorrBridge, WhenEveryCellsRowFitsTheRowsComeBeforeTheFirstStepAndItMoves) {
   EXPECT_EQ(s.warm_up_steps, 0);
   EXPECT_EQ(s.rows_before_planning, 0u);
   EXPECT_EQ(s.rows_in_planner, 0u);
+}
+
+TEST(LorrBridge, TheWorldsRowsHaveTheStepCostsOfThePlannersBudget) {
+  // Shelves with one-cell aisles and a band two rows high beside them (an open area, lanes.hpp),
+  // filled past 90% of its free cells: PIBT plans over operations when the step budget leaves
+  // room for them (auto), and then a move along the band costs 2 more (rule operations). The
+  // rule reads the budget the adapter gives the planner, and the rows are made with the same one.
+  const Grid g = Grid::from_rows({"............", ".@@@@@@@@@@.", "............", ".@@@@@@@@@@.",
+                                  "............", ".@@@@@@@@@@.", "............", "@@@@@@@@@@@@",
+                                  "............", "............"});
+  const int n = static_cast<int>(g.free_cells().size()) * 92 / 100;
+  auto costs = [&](double budget_ms) {
+    BridgeOptions o;
+    o.budget_ms = budget_ms;
+    return Bridge(g.height(), g.width(), start_kit_map(g), n, o).step_costs();
+  };
+  EXPECT_EQ(costs(100).open, 2.0) << "a budget with room for operations";
+  EXPECT_EQ(costs(100).lane, 2.0);
+  EXPECT_EQ(costs(0).open, 0.0) << "no budget: auto does not expect operations";
 }
 
 TEST(LorrBridge, ThePlannersCountersGoToStandardErrorEveryFewHundredSteps) {
