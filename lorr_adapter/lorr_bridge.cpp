@@ -138,12 +138,10 @@ BridgeOptions bridge_options_from_env() {
 
 struct Bridge::Impl {
   Impl(int rows, int cols, const std::vector<int>& map, int n, const BridgeOptions& o, Clock::time_point started)
-      : options(o), grid(grid_of(rows, cols, map)),
-        dist(grid, ActionModel::kRotation, size_t(o.dist_budget_mb) << 20, step_costs_of(o, grid, n)),
+      : options(o), grid(grid_of(rows, cols, map)), values(resolved_params(o, grid, n)),
+        dist(grid, ActionModel::kRotation, size_t(o.dist_budget_mb) << 20,
+             gdrhcr::step_costs(values, ActionModel::kRotation)),
         num_agents(n) {
-    Params params = planner_params(o);
-    const PlannerParams values = PlannerParams::resolve(o.planner, params, MapFacts(grid, n, ActionModel::kRotation));
-    params.check_all_used("GDRHCR_PARAMS for planner " + o.planner);
     const TurnPlanning turns = o.turns.empty() ? kLorrTurnPlanning : parse_turn_planning(o.turns);
     if (turns == TurnPlanning::kMapfWait) {
       auto wrapped = std::make_unique<MapfInRotation>(make_planner(values, grid, n, o.seed), grid,
@@ -260,30 +258,22 @@ struct Bridge::Impl {
     std::fflush(times);
   }
 
-  static Params given_params(const BridgeOptions& o) {
+  // The planner's parameters: GDRHCR_PARAMS and, unless they set them, what the adapter gives the
+  // planner (GD-RHCR's step budget, its share of the cap, and the machine's cores for its pool and
+  // the windowed LNS's zones; RHCR's timeout), resolved once. The planner and the world's rows both
+  // use them, so that a rule that reads the budget (the open cost) is the same in both.
+  static PlannerParams resolved_params(const BridgeOptions& o, const Grid& grid, int n) {
     Params params;
     for (auto& [k, v] : o.params) params.set(k, v);
-    return params;
-  }
-  // GDRHCR_PARAMS and, unless they set them, what the adapter gives the planner: GD-RHCR's step
-  // budget (its share of the cap) and the machine's cores for its pool and the windowed LNS's
-  // zones, RHCR's timeout. The planner and the world's rows both resolve these, so that a rule
-  // that reads the budget (the open cost) is the same in both.
-  static Params planner_params(const BridgeOptions& o) {
-    Params params = given_params(o);
     const double budget_s = o.budget_ms / 1000.0;
     if (budget_s > 0 && o.planner == "gd-rhcr" && !params.has("step-budget"))
       params.set("step-budget", std::to_string(kPlannerShare * budget_s));
     if (budget_s > 0 && o.planner == "rhcr" && !params.has("timeout")) params.set("timeout", std::to_string(budget_s));
     if (o.planner == "gd-rhcr" && !params.has("threads"))
       params.set("threads", std::to_string(std::max(1u, std::thread::hardware_concurrency())));
-    return params;
-  }
-  // The step costs the planner's parameters resolve to (the world's rows are built with them).
-  static StepCosts step_costs_of(const BridgeOptions& o, const Grid& grid, int n) {
-    Params params = planner_params(o);
-    return gdrhcr::step_costs(PlannerParams::resolve(o.planner, params, MapFacts(grid, n, ActionModel::kRotation)),
-                              ActionModel::kRotation);
+    PlannerParams values = PlannerParams::resolve(o.planner, params, MapFacts(grid, n, ActionModel::kRotation));
+    params.check_all_used("GDRHCR_PARAMS for planner " + o.planner);
+    return values;
   }
 
   static constexpr int kRowBatch = 2;  // rows computed at once: one row's time on two cores
@@ -295,6 +285,7 @@ struct Bridge::Impl {
   BridgeOptions options;
   std::FILE* times = nullptr;
   Grid grid;
+  PlannerParams values;  // resolved_params: the planner's, and the world's rows' step costs
   DistTable dist;  // rotation rows: the world's, and the native planners'
   const DistTable* planning_dist = nullptr;  // the rows the planner uses
   int num_agents;
