@@ -301,7 +301,10 @@ bool PibtStep::stalled() {
 // cells lowers it by kOpRetry, so that operations are tried again now and then (a first call,
 // computing rows, or a slow step does not rule them out for good; a change of way costs the fleet
 // a step or two, so seldom). Retries that do not fit back off (OpRetry): while a wait holds, the
-// estimate is not lowered, so only a deadline with room for it brings operations back.
+// estimate is not lowered, so only a deadline with room for it brings operations back. A first
+// pass the deadline cut counts the step's time before the call in its estimate: where guidance
+// takes most of the step, passes that never end would otherwise be weighed against the whole
+// step and kept (random-64-64-20, 1,600 agents at 50 ms: docs/results.md, "Session 48").
 bool PibtStep::over_operations(const WorldView& world) {
   using Clock = std::chrono::steady_clock;
   if (!world.rotation() || opt_.rotation == PibtOptions::Rotation::kCells) return false;

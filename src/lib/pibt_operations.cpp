@@ -358,7 +358,10 @@ void PibtStep::first_pass(const WorldView& world, std::chrono::steady_clock::tim
   if (reached < order_.size()) take_free_operations(world, reached);
   using Seconds = std::chrono::duration<double>;
   const double setup = Seconds(loop - start).count(), pass = Seconds(std::chrono::steady_clock::now() - loop).count();
-  const double whole = first_pass_estimate(setup, pass, order_.size(), reached);
+  double whole = first_pass_estimate(setup, pass, order_.size(), reached);
+  // Cut by the deadline, the pass also needed the time the step spent before this call (auto
+  // weighs it against the step's whole time: see over_operations).
+  if (reached < order_.size() && step_start_ < start) whole += Seconds(start - step_start_).count();
   op_pass_s_ = op_pass_s_ > 0 ? op_pass_s_ + kOpPassWeight * (whole - op_pass_s_) : whole;
 }
 

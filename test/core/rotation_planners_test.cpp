@@ -524,6 +524,30 @@ TEST(RotationPlanners, AutoWeighsTheFirstPassAgainstTheStepsTimeWhenItsStartIsGi
   EXPECT_EQ(c.pibt.operation_calls(), 2);
 }
 
+TEST(RotationPlanners, AutoCountsTheStepsTimeBeforeAFirstPassTheDeadlineCut) {
+  // kAuto over 3,000 agents, its first pass measured with time to spare. A call whose step began
+  // 1 s before it (guidance, say) and whose deadline has come is decided over operations (the step
+  // had 1 s) and cut at once; its estimate counts that second, so a step of 100 ms that leaves
+  // PIBT 50 ms is planned over cells. Without it the estimate stays near the measured pass (tens
+  // of ms), and every such step would try operations and be cut again.
+  AutoCrowd c;
+  using Clock = std::chrono::steady_clock;
+  ASSERT_TRUE(c.step());  // rows; over cells
+  c.pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
+  ASSERT_TRUE(c.step());
+  ASSERT_EQ(c.pibt.operation_calls(), 1);  // measured
+  const long stops = c.pibt.deadline_stops();
+  auto now = Clock::now();
+  c.pibt.set_deadline(now, now - std::chrono::seconds(1));
+  ASSERT_TRUE(c.step());
+  ASSERT_EQ(c.pibt.operation_calls(), 2);  // the step had 1 s: over operations
+  ASSERT_GT(c.pibt.deadline_stops(), stops);  // and cut
+  now = Clock::now();
+  c.pibt.set_deadline(now + std::chrono::milliseconds(50), now - std::chrono::milliseconds(50));
+  ASSERT_TRUE(c.step());
+  EXPECT_EQ(c.pibt.operation_calls(), 2);  // over cells
+}
+
 TEST(RotationPlanners, AFirstPassCutShortIsEstimatedAtMostTwiceItsLoop) {
   // kAuto's estimate of the whole first pass: a pass that reached every agent took what it took;
   // one the deadline cut is scaled up by fleet / reached, but to at most twice its loop: one long
