@@ -256,6 +256,13 @@ struct AutoCrowd {
     return o;
   }
   bool step() { return pibt_rotation_step(pibt, g, dist, validator, t++, goals, pos, heads); }
+  // Two valid steps: the first computes the rows (no deadline: over cells), the second, with 10 s
+  // to spare, is the one call over operations and measures their first pass.
+  bool measure_first_pass() {
+    if (!step()) return false;
+    pibt.set_deadline(std::chrono::steady_clock::now() + std::chrono::seconds(10));
+    return step() && pibt.operation_calls() == 1;
+  }
 };
 }  // namespace
 
@@ -511,10 +518,7 @@ TEST(RotationPlanners, AutoWeighsTheFirstPassAgainstTheStepsTimeWhenItsStartIsGi
   // operations (what the solves before PIBT took does not count against them).
   AutoCrowd c;
   using Clock = std::chrono::steady_clock;
-  ASSERT_TRUE(c.step());  // rows; over cells
-  c.pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
-  ASSERT_TRUE(c.step());
-  ASSERT_EQ(c.pibt.operation_calls(), 1);  // measured
+  ASSERT_TRUE(c.measure_first_pass());
   c.pibt.set_deadline(Clock::now());
   ASSERT_TRUE(c.step());
   EXPECT_EQ(c.pibt.operation_calls(), 1);  // no time left: cells
@@ -532,10 +536,7 @@ TEST(RotationPlanners, AutoCountsTheStepsTimeBeforeAFirstPassTheDeadlineCut) {
   // of ms), and every such step would try operations and be cut again.
   AutoCrowd c;
   using Clock = std::chrono::steady_clock;
-  ASSERT_TRUE(c.step());  // rows; over cells
-  c.pibt.set_deadline(Clock::now() + std::chrono::seconds(10));
-  ASSERT_TRUE(c.step());
-  ASSERT_EQ(c.pibt.operation_calls(), 1);  // measured
+  ASSERT_TRUE(c.measure_first_pass());
   const long stops = c.pibt.deadline_stops();
   auto now = Clock::now();
   c.pibt.set_deadline(now, now - std::chrono::seconds(1));
